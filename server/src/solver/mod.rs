@@ -1,0 +1,31 @@
+//! The paper's solver (Enzenhöfer, Lefebvre, Andrews, I3D 2019, §3): block principal pivoting for the
+//! boxed MLCP of one constraint island, with Cholesky row/column deletions on a skyline.
+//!
+//! This module knows nothing about bodies: it takes an [`Mlcp`] and returns `λ` and [`SolveStats`].
+//!
+//! | file | stage |
+//! |---|---|
+//! | `problem.rs` | the problem (eq. 3), validation, natural-map residual |
+//! | `io.rs` | the MLCP text format of `MLCP_FORMAT.md` |
+//! | `ordering.rs` | Cuthill–McKee / reverse Cuthill–McKee (§3.4), bandwidth and envelope |
+//! | `dense.rs` | dense left-looking Cholesky, row/column deletion, solves (Alg. 1, 2) |
+//! | `envelope.rs` | envelope (skyline) Cholesky, deletion on the skyline, solves (Alg. 3) |
+//! | `bpp.rs` | block principal pivoting (eq. 4–6) with Murty fallback and friction coupling |
+//! | `pgs.rs` | projected Gauss–Seidel baseline |
+//! | `reference.rs` | brute-force enumeration of index sets (test reference for small problems) |
+
+mod bpp;
+pub mod dense;
+pub mod envelope;
+pub mod io;
+pub mod ordering;
+pub mod pgs;
+mod problem;
+pub mod reference;
+mod stats;
+mod variant;
+
+pub use bpp::{Solver, SolverOptions};
+pub use problem::{IndexState, Mlcp, MlcpError, SymCsr, effective_bounds, natural_residual};
+pub use stats::{SolveStats, SolveStatus};
+pub use variant::{OrderingKind, UnknownVariant, Variant};

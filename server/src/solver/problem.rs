@@ -1,0 +1,707 @@
+//! The boxed mixed linear complementarity problem (paper eq. 3) and its validation.
+//!
+//! Given a symmetric positive (semi)definite `A ∈ ℝ^{m×m}`, `b ∈ ℝ^m` and bounds `lo ≤ hi`, find `λ`
+//! with `w = Aλ − b` such that for every row `i`
+//!
+//! ```text
+//!   lo_i < λ_i < hi_i  and  w_i = 0      (free,  i ∈ F)
+//!   λ_i = lo_i         and  w_i ≥ 0      (tight at the lower bound, i ∈ T_lo)
+//!   λ_i = hi_i         and  w_i ≤ 0      (tight at the upper bound, i ∈ T_hi)
+//! ```
+//!
+//! (paper eq. 3a/3b; `w = w₊ + w₋` with `0 ≤ w₊ ⊥ λ − lo ≥ 0` and `0 ≤ w₋ ⊥ hi − λ ≥ 0`).
+//!
+//! **Friction coupling.** A row `i` with `findex_i = j` is a friction row of the contact whose normal row
+//! is `j`. Its stored `lo_i ≤ 0 ≤ hi_i` are *coefficients*: the true bounds are
+//! `[lo_i · λ_j⁺, hi_i · λ_j⁺]` with `λ_j⁺ = max(λ_j, 0)` (a box approximation of the Coulomb cone,
+//! `hi_i = μ`, `lo_i = −μ`; see `MLCP_FORMAT.md`). A solution is judged against the bounds at the
+//! *final* normal impulse.
+//!
+//! **Residual.** The natural map `r(λ) = λ − clamp(λ − w, lo(λ), hi(λ))` is zero exactly at a
+//! solution; we report `‖r‖∞` and `‖r‖∞ / max(‖λ‖∞, 1e-300)`.
+//!
+//! `A` is kept in compressed sparse rows with both triangles stored ([`SymCsr`]); dense input is
+//! converted (exact zeros dropped), so every solver reads one representation.
+
+use thiserror::Error;
+
+/// Errors found while building or validating a problem. Each names the offending index.
+#[derive(Debug, Clone, PartialEq, Error)]
+pub enum MlcpError {
+    /// A vector or matrix does not have the length the problem size requires.
+    #[error("{what} has length {found}, expected {expected}")]
+    DimensionMismatch {
+        /// Which input.
+        what: &'static str,
+        /// The length required by the problem size.
+        expected: usize,
+        /// The length given.
+        found: usize,
+    },
+    /// A matrix entry is NaN or infinite.
+    #[error("A[{row},{col}] is not finite ({value})")]
+    NonFiniteMatrix {
+        /// Row of the entry.
+        row: usize,
+        /// Column of the entry.
+        col: usize,
+        /// The value found.
+        value: f64,
+    },
+    /// A vector entry is NaN (or infinite where only finite values make sense).
+    #[error("{vector}[{index}] is not allowed ({value})")]
+    NonFiniteVector {
+        /// Which vector (`b`, `lo`, `hi`, `lambda0`).
+        vector: &'static str,
+        /// Index of the entry.
+        index: usize,
+        /// The value found.
+        value: f64,
+    },
+    /// `lo_i > hi_i`, or a bound that admits no value (`lo = +∞`, `hi = −∞`).
+    #[error("row {index}: empty box lo = {lo} > hi = {hi}")]
+    EmptyBox {
+        /// Row index.
+        index: usize,
+        /// Lower bound.
+        lo: f64,
+        /// Upper bound.
+        hi: f64,
+    },
+    /// `findex_i` names a row outside `0..m` or the row itself.
+    #[error("row {row}: findex {target} is out of range or names the row itself")]
+    FindexOutOfRange {
+        /// The friction row.
+        row: usize,
+        /// The index it names.
+        target: i64,
+    },
+    /// `findex_i` names a row that is itself a friction row.
+    #[error("row {row}: findex {target} names another friction row")]
+    FindexToFrictionRow {
+        /// The friction row.
+        row: usize,
+        /// The friction row it names.
+        target: usize,
+    },
+    /// A friction row's coefficients must satisfy `−∞ < lo ≤ 0 ≤ hi < ∞`.
+    #[error("row {row}: friction coefficients must satisfy -inf < lo <= 0 <= hi < inf (lo = {lo}, hi = {hi})")]
+    FrictionCoefficients {
+        /// The friction row.
+        row: usize,
+        /// Its stored lower coefficient.
+        lo: f64,
+        /// Its stored upper coefficient.
+        hi: f64,
+    },
+    /// `A[i,j] ≠ A[j,i]` beyond rounding.
+    #[error("A is not symmetric: A[{row},{col}] = {a_ij} but A[{col},{row}] = {a_ji}")]
+    NotSymmetric {
+        /// Row of the entry.
+        row: usize,
+        /// Column of the entry.
+        col: usize,
+        /// `A[row, col]`.
+        a_ij: f64,
+        /// `A[col, row]`.
+        a_ji: f64,
+    },
+    /// A negative diagonal entry: `A` cannot be positive semidefinite.
+    #[error("A[{index},{index}] = {value} < 0: A is not positive semidefinite")]
+    NegativeDiagonal {
+        /// Row index.
+        index: usize,
+        /// The diagonal value.
+        value: f64,
+    },
+    /// A sparse entry given twice.
+    #[error("A[{row},{col}] is given more than once")]
+    DuplicateEntry {
+        /// Row of the entry.
+        row: usize,
+        /// Column of the entry.
+        col: usize,
+    },
+    /// A sparse entry outside `0..m`.
+    #[error("A[{row},{col}] lies outside a {n}x{n} matrix")]
+    EntryOutOfRange {
+        /// Row of the entry.
+        row: usize,
+        /// Column of the entry.
+        col: usize,
+        /// Problem size.
+        n: usize,
+    },
+}
+
+/// Relative tolerance of the symmetry check, against `sqrt(|A_ii A_jj|)` and the entry itself.
+pub const SYMMETRY_TOL: f64 = 1e-10;
+
+/// Symmetric matrix in compressed sparse rows, both triangles stored, columns sorted in each row.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct SymCsr {
+    n: usize,
+    row_ptr: Vec<usize>,
+    col: Vec<usize>,
+    val: Vec<f64>,
+}
+
+impl SymCsr {
+    /// Builds from a dense row-major `n × n` array. Exact zeros are not stored; `A[i,j]` and
+    /// `A[j,i]` must agree within [`SYMMETRY_TOL`] and are then averaged.
+    pub fn from_dense_row_major(n: usize, a: &[f64]) -> Result<Self, MlcpError> {
+        if a.len() != n * n {
+            return Err(MlcpError::DimensionMismatch { what: "A", expected: n * n, found: a.len() });
+        }
+        for (k, &v) in a.iter().enumerate() {
+            if !v.is_finite() {
+                return Err(MlcpError::NonFiniteMatrix { row: k / n, col: k % n, value: v });
+            }
+        }
+        let mut row_ptr = Vec::with_capacity(n + 1);
+        let mut col = Vec::new();
+        let mut val = Vec::new();
+        row_ptr.push(0);
+        for i in 0..n {
+            for j in 0..n {
+                let (aij, aji) = (a[i * n + j], a[j * n + i]);
+                if i != j {
+                    check_symmetric(i, j, aij, aji, a[i * n + i], a[j * n + j])?;
+                }
+                let v = 0.5 * (aij + aji);
+                if v != 0.0 || i == j {
+                    col.push(j);
+                    val.push(v);
+                }
+            }
+            row_ptr.push(col.len());
+        }
+        let m = SymCsr { n, row_ptr, col, val };
+        m.check_diagonal()?;
+        Ok(m)
+    }
+
+    /// Builds from `(row, col, value)` triplets that list every stored entry of *both* triangles
+    /// (the sparse form of `MLCP_FORMAT.md`). A repeated `(i, j)` is an error.
+    pub fn from_triplets(n: usize, triplets: &[(usize, usize, f64)]) -> Result<Self, MlcpError> {
+        let mut entries: Vec<(usize, usize, f64)> = Vec::with_capacity(triplets.len() + n);
+        for &(i, j, v) in triplets {
+            if i >= n || j >= n {
+                return Err(MlcpError::EntryOutOfRange { row: i, col: j, n });
+            }
+            if !v.is_finite() {
+                return Err(MlcpError::NonFiniteMatrix { row: i, col: j, value: v });
+            }
+            entries.push((i, j, v));
+        }
+        entries.sort_unstable_by_key(|&(i, j, _)| (i, j));
+        for w in entries.windows(2) {
+            if (w[0].0, w[0].1) == (w[1].0, w[1].1) {
+                return Err(MlcpError::DuplicateEntry { row: w[0].0, col: w[0].1 });
+            }
+        }
+        let find = |i: usize, j: usize| -> f64 {
+            entries
+                .binary_search_by_key(&(i, j), |&(a, b, _)| (a, b))
+                .map(|k| entries[k].2)
+                .unwrap_or(0.0)
+        };
+        let mut row_ptr = Vec::with_capacity(n + 1);
+        let mut col = Vec::with_capacity(entries.len() + n);
+        let mut val = Vec::with_capacity(entries.len() + n);
+        row_ptr.push(0);
+        let mut k = 0;
+        for i in 0..n {
+            let mut diag_done = false;
+            while k < entries.len() && entries[k].0 == i {
+                let (_, j, aij) = entries[k];
+                if j > i && !diag_done {
+                    col.push(i);
+                    val.push(0.0);
+                    diag_done = true;
+                }
+                if j == i {
+                    diag_done = true;
+                    col.push(j);
+                    val.push(aij);
+                } else {
+                    let aji = find(j, i);
+                    check_symmetric(i, j, aij, aji, find(i, i), find(j, j))?;
+                    col.push(j);
+                    val.push(0.5 * (aij + aji));
+                }
+                k += 1;
+            }
+            if !diag_done {
+                col.push(i);
+                val.push(0.0);
+            }
+            row_ptr.push(col.len());
+        }
+        // Entries present only in the upper or lower triangle: their mirror is missing (read as 0).
+        // `check_symmetric` above caught every entry whose mirror differs, including a missing one,
+        // so the pattern is symmetric here.
+        let m = SymCsr { n, row_ptr, col, val };
+        m.check_diagonal()?;
+        Ok(m)
+    }
+
+    /// A diagonal matrix.
+    pub fn diagonal(d: &[f64]) -> Result<Self, MlcpError> {
+        let t: Vec<_> = d.iter().enumerate().map(|(i, &v)| (i, i, v)).collect();
+        Self::from_triplets(d.len(), &t)
+    }
+
+    fn check_diagonal(&self) -> Result<(), MlcpError> {
+        for i in 0..self.n {
+            let d = self.get(i, i);
+            if d < 0.0 {
+                return Err(MlcpError::NegativeDiagonal { index: i, value: d });
+            }
+        }
+        Ok(())
+    }
+
+    /// Matrix size.
+    pub fn n(&self) -> usize {
+        self.n
+    }
+
+    /// Stored entries (both triangles, diagonal always stored).
+    pub fn nnz(&self) -> usize {
+        self.col.len()
+    }
+
+    /// Column indices and values of row `i`, columns ascending.
+    #[inline]
+    pub fn row(&self, i: usize) -> (&[usize], &[f64]) {
+        let r = self.row_ptr[i]..self.row_ptr[i + 1];
+        (&self.col[r.clone()], &self.val[r])
+    }
+
+    /// Row pointers (`n + 1` entries).
+    pub fn row_ptr(&self) -> &[usize] {
+        &self.row_ptr
+    }
+
+    /// Column indices of all rows, concatenated.
+    pub fn col_indices(&self) -> &[usize] {
+        &self.col
+    }
+
+    /// Values of all rows, concatenated.
+    pub fn values(&self) -> &[f64] {
+        &self.val
+    }
+
+    /// Entry `(i, j)` (zero when not stored).
+    pub fn get(&self, i: usize, j: usize) -> f64 {
+        let (c, v) = self.row(i);
+        c.binary_search(&j).map(|k| v[k]).unwrap_or(0.0)
+    }
+
+    /// `y = A x`.
+    #[inline]
+    pub fn mul_vec(&self, x: &[f64], y: &mut [f64]) {
+        debug_assert!(x.len() == self.n && y.len() == self.n);
+        for i in 0..self.n {
+            let (c, v) = self.row(i);
+            let mut s = 0.0;
+            for (&j, &a) in c.iter().zip(v) {
+                s += a * x[j];
+            }
+            y[i] = s;
+        }
+    }
+
+    /// Dense column-major copy (`out.len() == n²`; symmetric, so row- and column-major agree).
+    pub fn to_dense(&self, out: &mut [f64]) {
+        assert_eq!(out.len(), self.n * self.n);
+        out.fill(0.0);
+        for i in 0..self.n {
+            let (c, v) = self.row(i);
+            for (&j, &a) in c.iter().zip(v) {
+                out[j * self.n + i] = a;
+            }
+        }
+    }
+
+    /// Largest diagonal entry (1 for an empty matrix).
+    pub fn max_diag(&self) -> f64 {
+        (0..self.n).map(|i| self.get(i, i)).fold(0.0, f64::max).max(if self.n == 0 { 1.0 } else { 0.0 })
+    }
+
+    /// Rebuilds `self` as `P A Pᵀ` for the permutation `perm` (`perm[new] = old`, `inv[old] = new`),
+    /// reusing its buffers: no allocation once they have grown to the size of `a`.
+    pub fn permuted_from(&mut self, a: &SymCsr, perm: &[usize], inv: &[usize]) {
+        let n = a.n;
+        self.n = n;
+        self.row_ptr.clear();
+        self.col.clear();
+        self.val.clear();
+        self.row_ptr.push(0);
+        for &old in perm.iter().take(n) {
+            let (c, v) = a.row(old);
+            let start = self.col.len();
+            for (&j, &x) in c.iter().zip(v) {
+                self.col.push(inv[j]);
+                self.val.push(x);
+            }
+            // Sort the row by new column index (insertion sort: rows are short, no allocation).
+            let cols = &mut self.col[start..];
+            let vals = &mut self.val[start..];
+            for p in 1..cols.len() {
+                let mut q = p;
+                while q > 0 && cols[q - 1] > cols[q] {
+                    cols.swap(q - 1, q);
+                    vals.swap(q - 1, q);
+                    q -= 1;
+                }
+            }
+            self.row_ptr.push(self.col.len());
+        }
+    }
+}
+
+fn check_symmetric(i: usize, j: usize, aij: f64, aji: f64, aii: f64, ajj: f64) -> Result<(), MlcpError> {
+    let scale = (aii.abs() * ajj.abs()).sqrt().max(aij.abs()).max(aji.abs());
+    if (aij - aji).abs() > SYMMETRY_TOL * scale {
+        return Err(MlcpError::NotSymmetric { row: i, col: j, a_ij: aij, a_ji: aji });
+    }
+    Ok(())
+}
+
+/// Which side of its box a variable sits on in an index set (paper eq. 4).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+#[repr(u8)]
+pub enum IndexState {
+    /// `i ∈ F`: strictly inside its bounds, `w_i = 0`.
+    #[default]
+    Free = 0,
+    /// `i ∈ T_lo`: at its lower bound.
+    Lower = 1,
+    /// `i ∈ T_hi`: at its upper bound.
+    Upper = 2,
+}
+
+impl IndexState {
+    /// Tight (`Lower` or `Upper`).
+    #[inline]
+    pub fn is_tight(self) -> bool {
+        self != IndexState::Free
+    }
+}
+
+/// A validated boxed MLCP with optional friction coupling and warm start.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Mlcp {
+    a: SymCsr,
+    b: Vec<f64>,
+    lo: Vec<f64>,
+    hi: Vec<f64>,
+    findex: Vec<Option<usize>>,
+    nub: usize,
+    lambda0: Option<Vec<f64>>,
+    index0: Option<Vec<IndexState>>,
+}
+
+impl Mlcp {
+    /// Validates and builds a problem. `findex[i] = Some(j)` couples friction row `i` to normal row `j`.
+    pub fn new(
+        a: SymCsr,
+        b: Vec<f64>,
+        lo: Vec<f64>,
+        hi: Vec<f64>,
+        findex: Vec<Option<usize>>,
+    ) -> Result<Self, MlcpError> {
+        let n = a.n();
+        for (what, len) in [("b", b.len()), ("lo", lo.len()), ("hi", hi.len()), ("findex", findex.len())] {
+            if len != n {
+                return Err(MlcpError::DimensionMismatch { what, expected: n, found: len });
+            }
+        }
+        for (i, &v) in b.iter().enumerate() {
+            if !v.is_finite() {
+                return Err(MlcpError::NonFiniteVector { vector: "b", index: i, value: v });
+            }
+        }
+        for i in 0..n {
+            let (l, h) = (lo[i], hi[i]);
+            if l.is_nan() {
+                return Err(MlcpError::NonFiniteVector { vector: "lo", index: i, value: l });
+            }
+            if h.is_nan() {
+                return Err(MlcpError::NonFiniteVector { vector: "hi", index: i, value: h });
+            }
+            if l > h || l == f64::INFINITY || h == f64::NEG_INFINITY {
+                return Err(MlcpError::EmptyBox { index: i, lo: l, hi: h });
+            }
+        }
+        for i in 0..n {
+            if let Some(j) = findex[i] {
+                if j >= n || j == i {
+                    return Err(MlcpError::FindexOutOfRange { row: i, target: j as i64 });
+                }
+                if findex[j].is_some() {
+                    return Err(MlcpError::FindexToFrictionRow { row: i, target: j });
+                }
+                if !(lo[i].is_finite() && hi[i].is_finite() && lo[i] <= 0.0 && hi[i] >= 0.0) {
+                    return Err(MlcpError::FrictionCoefficients { row: i, lo: lo[i], hi: hi[i] });
+                }
+            }
+        }
+        let nub = (0..n).take_while(|&i| lo[i] == f64::NEG_INFINITY && hi[i] == f64::INFINITY).count();
+        Ok(Mlcp { a, b, lo, hi, findex, nub, lambda0: None, index0: None })
+    }
+
+    /// Adds a warm start: an initial `λ` and/or an initial index set. Validated like the rest.
+    pub fn with_warm_start(
+        mut self,
+        lambda0: Option<Vec<f64>>,
+        index0: Option<Vec<IndexState>>,
+    ) -> Result<Self, MlcpError> {
+        let n = self.n();
+        if let Some(l) = &lambda0 {
+            if l.len() != n {
+                return Err(MlcpError::DimensionMismatch { what: "lambda0", expected: n, found: l.len() });
+            }
+            if let Some((i, &v)) = l.iter().enumerate().find(|(_, v)| !v.is_finite()) {
+                return Err(MlcpError::NonFiniteVector { vector: "lambda0", index: i, value: v });
+            }
+        }
+        if let Some(s) = &index0 {
+            if s.len() != n {
+                return Err(MlcpError::DimensionMismatch { what: "index0", expected: n, found: s.len() });
+            }
+        }
+        self.lambda0 = lambda0;
+        self.index0 = index0;
+        Ok(self)
+    }
+
+    /// Problem size `m`.
+    pub fn n(&self) -> usize {
+        self.a.n()
+    }
+    /// Number of leading unbounded rows (informational; the solver looks at the bounds).
+    pub fn nub(&self) -> usize {
+        self.nub
+    }
+    /// The matrix.
+    pub fn a(&self) -> &SymCsr {
+        &self.a
+    }
+    /// Right-hand side.
+    pub fn b(&self) -> &[f64] {
+        &self.b
+    }
+    /// Stored lower bounds (coefficients `−μ` for friction rows).
+    pub fn lo(&self) -> &[f64] {
+        &self.lo
+    }
+    /// Stored upper bounds (coefficients `μ` for friction rows).
+    pub fn hi(&self) -> &[f64] {
+        &self.hi
+    }
+    /// Friction index.
+    pub fn findex(&self) -> &[Option<usize>] {
+        &self.findex
+    }
+    /// Warm-start `λ`, if any.
+    pub fn lambda0(&self) -> Option<&[f64]> {
+        self.lambda0.as_deref()
+    }
+    /// Warm-start index set, if any.
+    pub fn index0(&self) -> Option<&[IndexState]> {
+        self.index0.as_deref()
+    }
+    /// Whether any row is friction-coupled.
+    pub fn has_friction(&self) -> bool {
+        self.findex.iter().any(Option::is_some)
+    }
+
+    /// True bounds of row `i` at impulses `λ` (friction rows scale with `max(λ_j, 0)`).
+    #[inline]
+    pub fn bounds_at(&self, i: usize, lambda: &[f64]) -> (f64, f64) {
+        effective_bounds(self.lo[i], self.hi[i], self.findex[i], lambda)
+    }
+
+    /// `w = Aλ − b`.
+    pub fn residual_velocity(&self, lambda: &[f64], w: &mut [f64]) {
+        self.a.mul_vec(lambda, w);
+        for (wi, bi) in w.iter_mut().zip(&self.b) {
+            *wi -= bi;
+        }
+    }
+
+    /// Natural-map residual `(‖r‖∞, ‖r‖∞/‖λ‖∞)` of `λ` against the true (final-normal-impulse)
+    /// bounds. `w` is scratch of length `m`.
+    pub fn natural_residual(&self, lambda: &[f64], w: &mut [f64]) -> (f64, f64) {
+        self.residual_velocity(lambda, w);
+        natural_residual(lambda, w, &self.lo, &self.hi, &self.findex)
+    }
+}
+
+/// Effective bounds of a row given the stored bounds, its friction index and the impulses.
+#[inline]
+pub fn effective_bounds(lo: f64, hi: f64, findex: Option<usize>, lambda: &[f64]) -> (f64, f64) {
+    match findex {
+        None => (lo, hi),
+        Some(j) => {
+            let ln = lambda[j].max(0.0);
+            (lo * ln, hi * ln)
+        }
+    }
+}
+
+/// Natural-map residual of `(λ, w)` with bounds evaluated at `λ`: `(‖r‖∞, ‖r‖∞ / ‖λ‖∞)`.
+pub fn natural_residual(
+    lambda: &[f64],
+    w: &[f64],
+    lo: &[f64],
+    hi: &[f64],
+    findex: &[Option<usize>],
+) -> (f64, f64) {
+    let mut r: f64 = 0.0;
+    let mut norm: f64 = 0.0;
+    for i in 0..lambda.len() {
+        let (l, h) = effective_bounds(lo[i], hi[i], findex[i], lambda);
+        let ri = lambda[i] - (lambda[i] - w[i]).max(l).min(h);
+        // NaN must never look small.
+        r = if ri.is_nan() { f64::INFINITY } else { r.max(ri.abs()) };
+        norm = norm.max(lambda[i].abs());
+    }
+    (r, r / norm.max(1e-300))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn spd2() -> SymCsr {
+        SymCsr::from_dense_row_major(2, &[2.0, 1.0, 1.0, 2.0]).unwrap()
+    }
+
+    #[test]
+    fn dense_and_triplets_agree() {
+        let d = SymCsr::from_dense_row_major(3, &[4.0, 1.0, 0.0, 1.0, 3.0, 0.5, 0.0, 0.5, 2.0]).unwrap();
+        let t = SymCsr::from_triplets(
+            3,
+            &[(0, 0, 4.0), (0, 1, 1.0), (1, 0, 1.0), (1, 1, 3.0), (1, 2, 0.5), (2, 1, 0.5), (2, 2, 2.0)],
+        )
+        .unwrap();
+        assert_eq!(d, t);
+        let mut y = [0.0; 3];
+        d.mul_vec(&[1.0, 2.0, 3.0], &mut y);
+        assert_eq!(y, [6.0, 8.5, 7.0]);
+    }
+
+    #[test]
+    fn malformed_matrices_are_typed_errors() {
+        assert!(matches!(
+            SymCsr::from_dense_row_major(2, &[1.0, 2.0, 3.0]),
+            Err(MlcpError::DimensionMismatch { .. })
+        ));
+        assert!(matches!(
+            SymCsr::from_dense_row_major(2, &[1.0, f64::NAN, f64::NAN, 1.0]),
+            Err(MlcpError::NonFiniteMatrix { row: 0, col: 1, .. })
+        ));
+        assert!(matches!(
+            SymCsr::from_dense_row_major(2, &[1.0, 0.5, 0.4, 1.0]),
+            Err(MlcpError::NotSymmetric { row: 0, col: 1, .. })
+        ));
+        assert!(matches!(
+            SymCsr::from_triplets(2, &[(0, 0, 1.0), (0, 1, 0.3), (1, 1, 1.0)]),
+            Err(MlcpError::NotSymmetric { row: 0, col: 1, .. })
+        ));
+        assert!(matches!(
+            SymCsr::from_triplets(2, &[(0, 0, 1.0), (0, 0, 1.0)]),
+            Err(MlcpError::DuplicateEntry { row: 0, col: 0 })
+        ));
+        assert!(matches!(
+            SymCsr::from_triplets(2, &[(0, 2, 1.0)]),
+            Err(MlcpError::EntryOutOfRange { row: 0, col: 2, n: 2 })
+        ));
+        assert!(matches!(
+            SymCsr::from_dense_row_major(2, &[-1.0, 0.0, 0.0, 1.0]),
+            Err(MlcpError::NegativeDiagonal { index: 0, .. })
+        ));
+    }
+
+    #[test]
+    fn malformed_problems_are_typed_errors() {
+        let inf = f64::INFINITY;
+        let mk = |b: Vec<f64>, lo: Vec<f64>, hi: Vec<f64>, f: Vec<Option<usize>>| Mlcp::new(spd2(), b, lo, hi, f);
+        assert!(matches!(
+            mk(vec![1.0], vec![0.0; 2], vec![inf; 2], vec![None; 2]),
+            Err(MlcpError::DimensionMismatch { what: "b", .. })
+        ));
+        assert!(matches!(
+            mk(vec![1.0, f64::INFINITY], vec![0.0; 2], vec![inf; 2], vec![None; 2]),
+            Err(MlcpError::NonFiniteVector { vector: "b", index: 1, .. })
+        ));
+        assert!(matches!(
+            mk(vec![1.0; 2], vec![0.0, 2.0], vec![inf, 1.0], vec![None; 2]),
+            Err(MlcpError::EmptyBox { index: 1, .. })
+        ));
+        assert!(matches!(
+            mk(vec![1.0; 2], vec![0.0, f64::NAN], vec![inf; 2], vec![None; 2]),
+            Err(MlcpError::NonFiniteVector { vector: "lo", index: 1, .. })
+        ));
+        assert!(matches!(
+            mk(vec![1.0; 2], vec![0.0, -1.0], vec![inf, 1.0], vec![None, Some(5)]),
+            Err(MlcpError::FindexOutOfRange { row: 1, target: 5 })
+        ));
+        assert!(matches!(
+            mk(vec![1.0; 2], vec![0.0, -1.0], vec![inf, 1.0], vec![None, Some(1)]),
+            Err(MlcpError::FindexOutOfRange { row: 1, target: 1 })
+        ));
+        assert!(matches!(
+            mk(vec![1.0; 2], vec![-1.0, -1.0], vec![1.0, 1.0], vec![Some(1), Some(0)]),
+            Err(MlcpError::FindexToFrictionRow { row: 0, target: 1 })
+        ));
+        assert!(matches!(
+            mk(vec![1.0; 2], vec![0.0, -inf], vec![inf, 1.0], vec![None, Some(0)]),
+            Err(MlcpError::FrictionCoefficients { row: 1, .. })
+        ));
+        let ok = mk(vec![1.0; 2], vec![0.0, -1.0], vec![inf, 1.0], vec![None, Some(0)]).unwrap();
+        assert!(matches!(
+            ok.clone().with_warm_start(Some(vec![0.0, f64::NAN]), None),
+            Err(MlcpError::NonFiniteVector { vector: "lambda0", index: 1, .. })
+        ));
+        assert!(matches!(
+            ok.with_warm_start(None, Some(vec![IndexState::Free])),
+            Err(MlcpError::DimensionMismatch { what: "index0", .. })
+        ));
+    }
+
+    #[test]
+    fn residual_uses_final_normal_impulse() {
+        // Row 1 is friction on row 0 with mu = 0.5.
+        let p = Mlcp::new(spd2(), vec![3.0, 3.0], vec![0.0, -0.5], vec![f64::INFINITY, 0.5], vec![None, Some(0)])
+            .unwrap();
+        let mut w = [0.0; 2];
+        // lambda_n = 1, friction at mu*lambda_n = 0.5 with w_1 = 1 + 1 - 3 = -1 <= 0: tight at upper is fine.
+        // w_0 = 2 + 0.5 - 3 = -0.5: normal row not satisfied.
+        let (r, _) = p.natural_residual(&[1.0, 0.5], &mut w);
+        assert!((r - 0.5).abs() < 1e-15);
+        // Exact solution: with the friction row at mu*ln, 2 ln + 0.5 ln = 3 gives ln = 1.2, lt = 0.6,
+        // and w1 = 1.2 + 1.2 - 3 = -0.6 <= 0, as a row tight at its upper bound requires.
+        let (r, rel) = p.natural_residual(&[1.2, 0.6], &mut w);
+        assert!(r < 1e-14 && rel < 1e-14, "{r}");
+    }
+
+    #[test]
+    fn permutation_round_trip() {
+        let a = SymCsr::from_dense_row_major(3, &[4.0, 1.0, 0.0, 1.0, 3.0, 0.5, 0.0, 0.5, 2.0]).unwrap();
+        let perm = [2, 0, 1];
+        let inv = [1, 2, 0];
+        let mut p = SymCsr::default();
+        p.permuted_from(&a, &perm, &inv);
+        for i in 0..3 {
+            for j in 0..3 {
+                assert_eq!(p.get(i, j), a.get(perm[i], perm[j]));
+            }
+        }
+    }
+}

@@ -1,0 +1,99 @@
+//! What a solve reports: status and statistics (soft outcomes are data, not errors).
+
+use super::variant::{OrderingKind, Variant};
+
+/// How a solve ended.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum SolveStatus {
+    /// The index set settled and the natural-map residual met the tolerance.
+    #[default]
+    Converged,
+    /// The step cap was reached; `λ` is the iterate with the smallest residual seen.
+    MaxSteps,
+    /// The problem had no rows.
+    Empty,
+}
+
+impl SolveStatus {
+    /// Name used in reports.
+    pub fn name(self) -> &'static str {
+        match self {
+            SolveStatus::Converged => "converged",
+            SolveStatus::MaxSteps => "max-steps",
+            SolveStatus::Empty => "empty",
+        }
+    }
+}
+
+/// Statistics of one solve. Buffers are reused from solve to solve (no allocation once sized).
+#[derive(Debug, Clone, Default, serde::Serialize)]
+pub struct SolveStats {
+    /// Variant used.
+    pub variant: Variant,
+    /// Ordering used (natural for the dense variants).
+    pub ordering: OrderingKind,
+    /// How the solve ended.
+    pub status: SolveStatus,
+    /// Problem size `m`.
+    pub m: usize,
+    /// Stored non-zeros of `A` (both triangles).
+    pub nnz: usize,
+    /// Bandwidth of `A` in input order.
+    pub bandwidth_before: usize,
+    /// Bandwidth after reordering.
+    pub bandwidth_after: usize,
+    /// Envelope (profile) of `A` below the diagonal, input order: `Σ_i (i − first_nz(i))`.
+    pub envelope_before: usize,
+    /// Same after reordering.
+    pub envelope_after: usize,
+    /// Stored entries of the factor (envelope storage incl. diagonal, or `m(m+1)/2` dense).
+    pub factor_entries: usize,
+    /// Pivot steps (linear solves with a new index set) taken.
+    pub pivot_steps: usize,
+    /// PGS sweeps (PGS only).
+    pub iterations: usize,
+    /// Tight count at each pivot step (length `pivot_steps`).
+    pub tight_per_step: Vec<u32>,
+    /// Tight count of the returned solution.
+    pub tight: usize,
+    /// Whether Murty's single-pivot fallback ran.
+    pub fallback: bool,
+    /// Murty single-pivot steps taken.
+    pub murty_steps: usize,
+    /// Outer friction-bound updates (0 without friction coupling).
+    pub friction_updates: usize,
+    /// Pivots of the factorization that were non-positive or tiny and were regularized.
+    pub regularized: usize,
+    /// Row deletions applied (downdate variants).
+    pub deletions: usize,
+    /// How `auto` chose, per strategy: [deletions from L₀, deletions from previous, incremental].
+    pub auto_choices: [usize; 3],
+    /// Natural-map residual `‖r‖∞` against the true bounds.
+    pub residual: f64,
+    /// `‖r‖∞ / ‖λ‖∞`.
+    pub residual_rel: f64,
+    /// Deletion error `max ‖L_deleted − chol(A_FF)‖_F / ‖chol(A_FF)‖_F` over the pivot steps,
+    /// when requested (paper Table 4).
+    pub deletion_error: Option<f64>,
+    /// Same, absolute Frobenius norm (the paper's Table 4 unit).
+    pub deletion_error_abs: Option<f64>,
+    /// Time spent ordering, µs.
+    pub ordering_us: f64,
+    /// Time spent factoring (initial factor and refactors), µs.
+    pub factor_us: f64,
+    /// Time spent copying and deleting rows/columns, µs.
+    pub downdate_us: f64,
+    /// Time spent in triangular solves and residual updates, µs.
+    pub solve_us: f64,
+    /// Wall time of the whole solve, µs.
+    pub total_us: f64,
+}
+
+impl SolveStats {
+    pub(crate) fn reset(&mut self, variant: Variant, ordering: OrderingKind, m: usize, nnz: usize) {
+        let mut per_step = std::mem::take(&mut self.tight_per_step);
+        per_step.clear();
+        *self = SolveStats { variant, ordering, m, nnz, tight_per_step: per_step, ..Default::default() };
+    }
+}
