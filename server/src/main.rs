@@ -1,1 +1,157 @@
-fn main() {}
+//! `pivotsim-server`: the CLI over the pivotsim library.
+//!
+//! Subcommands today: `solve` (one MLCP file) and `bench-solver` (every variant on generated and
+//! shared problems). `serve`, `run` and `scenes` arrive with the server, scene and dynamics issues.
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use anyhow::Context;
+use clap::{Parser, Subcommand};
+use pivotsim_server::solver::{OrderingKind, Solver, SolverOptions, Variant, io};
+
+/// Exact-contact multibody physics server (block principal pivoting with Cholesky downdates).
+#[derive(Debug, Parser)]
+#[command(version, about)]
+struct Cli {
+    #[command(subcommand)]
+    command: Option<Command>,
+}
+
+#[derive(Debug, Subcommand)]
+enum Command {
+    /// Solve one MLCP file (format: shared/MLCP_FORMAT.md) and print its statistics.
+    Solve {
+        /// The problem file.
+        file: PathBuf,
+        /// Solver variant: full, downdate, skyline, skyline-refactor, incremental, auto, pgs.
+        #[arg(long, default_value = "auto")]
+        variant: Variant,
+        /// Cap on pivot steps (PGS: sweeps).
+        #[arg(long, default_value_t = 35)]
+        max_steps: usize,
+        /// Reordering for the envelope variants: natural, cm, rcm.
+        #[arg(long, default_value = "rcm")]
+        ordering: OrderingKind,
+        /// Relative natural-map residual to reach.
+        #[arg(long, default_value_t = 1e-10)]
+        tol: f64,
+        /// Write λ here (one number per line, 17 significant digits).
+        #[arg(long)]
+        solution: Option<PathBuf>,
+        /// Also measure the deletion error against a refactor from scratch (slower).
+        #[arg(long)]
+        deletion_error: bool,
+        /// Print one JSON object instead of text.
+        #[arg(long)]
+        json: bool,
+    },
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let result = match cli.command {
+        Some(Command::Solve { file, variant, max_steps, ordering, tol, solution, deletion_error, json }) => {
+            solve(&file, variant, max_steps, ordering, tol, solution, deletion_error, json)
+        }
+        None => {
+            eprintln!("pivotsim-server: give a subcommand (see --help); the server itself arrives with the server issue");
+            return ExitCode::from(2);
+        }
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+fn solve(
+    file: &std::path::Path,
+    variant: Variant,
+    max_steps: usize,
+    ordering: OrderingKind,
+    tol: f64,
+    solution: Option<PathBuf>,
+    deletion_error: bool,
+    json: bool,
+) -> anyhow::Result<()> {
+    let p = io::read_mlcp_file(file)?;
+    let mut opts = SolverOptions { variant, ordering, max_steps, tol_rel: tol, ..Default::default() };
+    opts.pgs.max_iterations = max_steps;
+    opts.pgs.tol_rel = tol;
+    opts.measure_deletion_error = deletion_error;
+    let mut solver = Solver::new(opts);
+    let mut lambda = vec![0.0; p.n()];
+    let st = solver.solve(&p, &mut lambda).clone();
+    if let Some(out) = solution {
+        let mut f = std::io::BufWriter::new(
+            std::fs::File::create(&out).with_context(|| format!("cannot create {}", out.display()))?,
+        );
+        io::write_solution(&lambda, &mut f).with_context(|| format!("cannot write {}", out.display()))?;
+    }
+    if json {
+        let v = serde_json::json!({
+            "file": file.display().to_string(),
+            "n": st.m,
+            "nnz": st.nnz,
+            "variant": st.variant.name(),
+            "ordering": st.ordering.name(),
+            "status": st.status.name(),
+            "pivot_steps": st.pivot_steps,
+            "iterations": st.iterations,
+            "tight": st.tight,
+            "tight_per_step": st.tight_per_step,
+            "fallback": st.fallback,
+            "murty_steps": st.murty_steps,
+            "line_search_steps": st.line_search_steps,
+            "friction_updates": st.friction_updates,
+            "coupled_steps": st.coupled_steps,
+            "krylov_iterations": st.krylov_iterations,
+            "residual": st.residual,
+            "residual_rel": st.residual_rel,
+            "time_us": st.total_us,
+            "ordering_us": st.ordering_us,
+            "factor_us": st.factor_us,
+            "downdate_us": st.downdate_us,
+            "solve_us": st.solve_us,
+            "bandwidth": st.bandwidth_after,
+            "bandwidth_before": st.bandwidth_before,
+            "envelope": st.envelope_after,
+            "envelope_before": st.envelope_before,
+            "factor_entries": st.factor_entries,
+            "deletions": st.deletions,
+            "auto_choices": st.auto_choices,
+            "regularized": st.regularized,
+            "deletion_error": st.deletion_error,
+            "deletion_error_abs": st.deletion_error_abs,
+        });
+        println!("{v}");
+    } else {
+        println!(
+            "{}: n={} variant={} status={} pivot_steps={} tight={} residual={:.3e} (rel {:.3e}) time={:.1} µs \
+             [order {:.1}, factor {:.1}, downdate {:.1}, solve {:.1}] bandwidth {}→{} envelope {}→{} regularized={}",
+            file.display(),
+            st.m,
+            st.variant,
+            st.status.name(),
+            if st.variant == Variant::Pgs { st.iterations } else { st.pivot_steps },
+            st.tight,
+            st.residual,
+            st.residual_rel,
+            st.total_us,
+            st.ordering_us,
+            st.factor_us,
+            st.downdate_us,
+            st.solve_us,
+            st.bandwidth_before,
+            st.bandwidth_after,
+            st.envelope_before,
+            st.envelope_after,
+            st.regularized
+        );
+    }
+    Ok(())
+}

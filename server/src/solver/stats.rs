@@ -11,8 +11,11 @@ pub enum SolveStatus {
     Converged,
     /// The step cap was reached; `λ` is the iterate with the smallest residual seen.
     MaxSteps,
-    /// The problem had no rows.
+    /// The problem had no rows (or the output slice had the wrong length).
     Empty,
+    /// A non-finite value appeared (numerically singular beyond regularization); `λ` is the best
+    /// finite iterate seen.
+    NonFinite,
 }
 
 impl SolveStatus {
@@ -22,6 +25,7 @@ impl SolveStatus {
             SolveStatus::Converged => "converged",
             SolveStatus::MaxSteps => "max-steps",
             SolveStatus::Empty => "empty",
+            SolveStatus::NonFinite => "non-finite",
         }
     }
 }
@@ -61,8 +65,14 @@ pub struct SolveStats {
     pub fallback: bool,
     /// Murty single-pivot steps taken.
     pub murty_steps: usize,
-    /// Outer friction-bound updates (0 without friction coupling).
+    /// Steps whose Newton point was damped by the line search (friction-coupled problems).
+    pub line_search_steps: usize,
+    /// Outer friction-bound updates (`FrictionStrategy::Outer`).
     pub friction_updates: usize,
+    /// Steps that took the exact coupled Newton point (GMRES preconditioned by the factor).
+    pub coupled_steps: usize,
+    /// GMRES iterations of those steps.
+    pub krylov_iterations: usize,
     /// Pivots of the factorization that were non-positive or tiny and were regularized.
     pub regularized: usize,
     /// Row deletions applied (downdate variants).
