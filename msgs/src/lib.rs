@@ -5,4 +5,5 @@
 //! variants as they travel on the wire, so that every side spells them the same way.
 
 /// Solver variant names as they appear on the wire, in the CLI and in reports.
-pub const SOLVER_VARIANTS: [&str; 7] = ["full", "downdate", "skyline", "skyline-refactor", "incremental", "auto", "pgs"];
+pub const SOLVER_VARIANTS: [&str; 7] =
+    ["full", "downdate", "skyline", "skyline-refactor", "incremental", "auto", "pgs"];

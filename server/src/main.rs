@@ -55,7 +55,9 @@ fn main() -> ExitCode {
             solve(&file, variant, max_steps, ordering, tol, solution, deletion_error, json)
         }
         None => {
-            eprintln!("pivotsim-server: give a subcommand (see --help); the server itself arrives with the server issue");
+            eprintln!(
+                "pivotsim-server: give a subcommand (see --help); the server itself arrives with the server issue"
+            );
             return ExitCode::from(2);
         }
     };

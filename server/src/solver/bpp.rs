@@ -273,8 +273,10 @@ impl Solver {
         let (res, res_rel) = super::natural_residual(&self.lam, &self.w, &self.lop, &self.hip, &self.fip);
         self.stats.residual = res;
         self.stats.residual_rel = res_rel;
-        self.stats.status = if converged {
+        self.stats.status = if converged && (res_rel <= self.opts.tol_rel || res == 0.0) {
             SolveStatus::Converged
+        } else if converged {
+            SolveStatus::Inexact
         } else if self.non_finite {
             SolveStatus::NonFinite
         } else {
@@ -333,9 +335,9 @@ impl Solver {
                     no_progress = 0;
                     continue;
                 }
-                // Bounds consistent: what is left is rounding. Refine once.
+                // Bounds consistent: what is left is rounding. Iterative refinement.
                 if self.opts.refine {
-                    self.refine_free();
+                    self.refine_until_converged(res_rel);
                 }
                 return true;
             }
@@ -440,7 +442,8 @@ impl Solver {
                 // Same index set and bounds consistent up to rounding: refine and re-check.
                 self.update_bounds();
                 self.refine_free();
-                let (res, res_rel) = super::natural_residual(&self.lam, &self.w, &self.lop, &self.hip, &self.fip);
+                let (res, res_rel) =
+                    super::natural_residual(&self.lam, &self.w, &self.lop, &self.hip, &self.fip);
                 theta = natural_residual_sq(&self.lam, &self.w, &self.lop, &self.hip, &self.fip);
                 if res_rel < best {
                     best = res_rel;
@@ -571,10 +574,11 @@ impl Solver {
         let m = self.ap.n();
         let mut coupled = 0;
         for i in 0..m {
-            if let (true, Some(j)) = (self.tight[i], self.fip[i]) {
-                if !self.tight[j] && self.lam[j] > 0.0 {
-                    coupled += 1;
-                }
+            if let (true, Some(j)) = (self.tight[i], self.fip[i])
+                && !self.tight[j]
+                && self.lam[j] > 0.0
+            {
+                coupled += 1;
             }
         }
         if coupled == 0 {
@@ -682,11 +686,11 @@ impl Solver {
     fn apply_coupling(&mut self) {
         let m = self.ap.n();
         for i in 0..m {
-            if let (true, Some(j)) = (self.tight[i], self.fip[i]) {
-                if !self.tight[j] {
-                    let coef = if self.state[i] == IndexState::Upper { self.hip[i] } else { self.lop[i] };
-                    self.lam[i] = coef * self.lam[j].max(0.0);
-                }
+            if let (true, Some(j)) = (self.tight[i], self.fip[i])
+                && !self.tight[j]
+            {
+                let coef = if self.state[i] == IndexState::Upper { self.hip[i] } else { self.lop[i] };
+                self.lam[i] = coef * self.lam[j].max(0.0);
             }
         }
     }
@@ -700,11 +704,12 @@ impl Solver {
             }
         }
         for i in 0..m {
-            if let (true, Some(j)) = (self.tight[i], self.fip[i]) {
-                if !self.tight[j] && self.lam[j] > 0.0 {
-                    let coef = if self.state[i] == IndexState::Upper { self.hip[i] } else { self.lop[i] };
-                    self.kry_z[i] = coef * self.kry_z[j];
-                }
+            if let (true, Some(j)) = (self.tight[i], self.fip[i])
+                && !self.tight[j]
+                && self.lam[j] > 0.0
+            {
+                let coef = if self.state[i] == IndexState::Upper { self.hip[i] } else { self.lop[i] };
+                self.kry_z[i] = coef * self.kry_z[j];
             }
         }
         self.ap.mul_vec(&self.kry_z, &mut self.rhs);
@@ -769,7 +774,8 @@ impl Solver {
             }
             Variant::SkylineRefactor => {
                 let t = Instant::now();
-                self.stats.regularized += self.env.factor_from(&self.ap, &self.tight, &mut self.l, 0, self.max_diag);
+                self.stats.regularized +=
+                    self.env.factor_from(&self.ap, &self.tight, &mut self.l, 0, self.max_diag);
                 self.stats.factor_us += us(t);
                 FactorIn::L
             }
@@ -789,16 +795,24 @@ impl Solver {
                 let tmin = self.tight.iter().position(|&t| t).unwrap_or(m);
                 let del_all: f64 = (0..m).filter(|&i| self.tight[i]).map(|i| self.env.cost_delete(i)).sum();
                 let lmin = if self.l_valid { self.tight_l.iter().position(|&t| t).unwrap_or(m) } else { 0 };
-                let cost_a = wc * self.env.cost_copy_from(self.env.first_column_of_row(tmin.min(lmin))) + wd * del_all;
+                let cost_a =
+                    wc * self.env.cost_copy_from(self.env.first_column_of_row(tmin.min(lmin))) + wd * del_all;
                 // (b) further deletions from the current factor, when T only grew.
                 let grew = self.l_valid && (0..m).all(|i| !self.tight_l[i] || self.tight[i]);
                 let cost_b = if grew {
-                    wd * (0..m).filter(|&i| self.tight[i] && !self.tight_l[i]).map(|i| self.env.cost_delete(i)).sum::<f64>()
+                    wd * (0..m)
+                        .filter(|&i| self.tight[i] && !self.tight_l[i])
+                        .map(|i| self.env.cost_delete(i))
+                        .sum::<f64>()
                 } else {
                     f64::INFINITY
                 };
                 // (c) incremental refactor from the first change (a full refactor when L is stale).
-                let c = if self.l_valid { (0..m).position(|i| self.tight[i] != self.tight_l[i]).unwrap_or(m) } else { 0 };
+                let c = if self.l_valid {
+                    (0..m).position(|i| self.tight[i] != self.tight_l[i]).unwrap_or(m)
+                } else {
+                    0
+                };
                 let cost_c = wf * self.env.cost_factor_from(c);
                 if cost_b <= cost_a && cost_b <= cost_c {
                     self.stats.auto_choices[1] += 1;
@@ -854,7 +868,8 @@ impl Solver {
     fn incremental(&mut self) {
         let m = self.ap.n();
         let t = Instant::now();
-        let c = if self.l_valid { (0..m).position(|i| self.tight[i] != self.tight_l[i]).unwrap_or(m) } else { 0 };
+        let c =
+            if self.l_valid { (0..m).position(|i| self.tight[i] != self.tight_l[i]).unwrap_or(m) } else { 0 };
         self.stats.regularized += self.env.factor_from(&self.ap, &self.tight, &mut self.l, c, self.max_diag);
         self.tight_l.copy_from_slice(&self.tight);
         self.l_valid = true;
@@ -881,7 +896,9 @@ impl Solver {
             }
             dense::cholesky_in_place(&mut self.lref, m, self.max_diag);
             let abs = dense::frobenius_diff(&self.dense_l, &self.lref, m);
-            let norm = (0..m).map(|j| self.lref[j * m + j..j * m + m].iter().map(|x| x * x).sum::<f64>()).sum::<f64>();
+            let norm = (0..m)
+                .map(|j| self.lref[j * m + j..j * m + m].iter().map(|x| x * x).sum::<f64>())
+                .sum::<f64>();
             (abs, norm.sqrt())
         } else {
             self.env.factor_from(&self.ap, &self.tight, &mut self.lref, 0, self.max_diag);
@@ -930,7 +947,9 @@ impl Solver {
         for i in 0..m {
             let (lo, hi) = effective_bounds(self.lop[i], self.hip[i], self.fip[i], &self.lam);
             let tol = 1e-14 * (1.0 + lo.abs().max(hi.abs()));
-            if self.fip[i].is_some() && ((lo - self.lo_eff[i]).abs() > tol || (hi - self.hi_eff[i]).abs() > tol) {
+            if self.fip[i].is_some()
+                && ((lo - self.lo_eff[i]).abs() > tol || (hi - self.hi_eff[i]).abs() > tol)
+            {
                 moved = true;
             }
             self.lo_eff[i] = lo;
@@ -978,6 +997,24 @@ impl Solver {
     }
 
     /// One step of iterative refinement on the free system `A_FF λ_F = b_F − A_FT λ_T`.
+    /// Up to three refinement steps while they reduce the residual (ill-conditioned `A_FF`).
+    fn refine_until_converged(&mut self, mut res_rel: f64) {
+        for _ in 0..3 {
+            if res_rel <= self.opts.tol_rel {
+                return;
+            }
+            self.best.copy_from_slice(&self.lam);
+            self.refine_free();
+            let (_, r) = super::natural_residual(&self.lam, &self.w, &self.lop, &self.hip, &self.fip);
+            if r.is_nan() || r >= res_rel {
+                self.lam.copy_from_slice(&self.best);
+                self.compute_w();
+                return;
+            }
+            res_rel = r;
+        }
+    }
+
     fn refine_free(&mut self) {
         let m = self.ap.n();
         let t = Instant::now();
@@ -987,7 +1024,9 @@ impl Solver {
         }
         let which = match self.opts.variant {
             Variant::Full => FactorIn::Compact,
-            Variant::Downdate | Variant::Skyline | Variant::Auto if !self.tight.iter().any(|&t| t) => FactorIn::L0,
+            Variant::Downdate | Variant::Skyline | Variant::Auto if !self.tight.iter().any(|&t| t) => {
+                FactorIn::L0
+            }
             _ => FactorIn::L,
         };
         self.solve_with(which);

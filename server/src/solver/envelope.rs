@@ -404,7 +404,7 @@ mod tests {
             assert!(s.windows(2).all(|w| w[0] <= w[1]));
             assert!((0..n).all(|j| s[j] >= j && s[j] < n));
             let mut l = vec![0.0; env.len()];
-            assert_eq!(env.factor_from(&a, &vec![false; n], &mut l, 0, 1.0), 0);
+            assert_eq!(env.factor_from(&a, &vec![false; n], &mut l, 0, a.max_diag()), 0);
             let reference = d.clone().cholesky().unwrap().l();
             // Every non-zero of the true factor lies inside the envelope, and values agree.
             let err = (dense_of(&env, &l) - &reference).norm() / reference.norm();
@@ -420,9 +420,9 @@ mod tests {
         let mut env = Envelope::new();
         env.build(&a);
         let mut l = vec![0.0; env.len()];
-        env.factor_from(&a, &[false; 120], &mut l, 0, 1.0);
+        env.factor_from(&a, &[false; 120], &mut l, 0, a.max_diag());
         let mut ld = d.as_slice().to_vec();
-        dense::cholesky_in_place(&mut ld, 120, 1.0);
+        dense::cholesky_in_place(&mut ld, 120, a.max_diag());
         for j in 0..120 {
             for p in j..120 {
                 assert!((env.get(&l, p, j) - ld[j * 120 + p]).abs() < 1e-13);
@@ -438,7 +438,7 @@ mod tests {
             let mut env = Envelope::new();
             env.build(&a);
             let mut l0 = vec![0.0; env.len()];
-            env.factor_from(&a, &vec![false; n], &mut l0, 0, 1.0);
+            env.factor_from(&a, &vec![false; n], &mut l0, 0, a.max_diag());
             for frac in [0.02, 0.1, 0.3, 0.7] {
                 let tight: Vec<bool> = (0..n).map(|_| rng.random_range(0.0..1.0) < frac).collect();
                 let mut l = l0.clone();
@@ -452,7 +452,7 @@ mod tests {
                 assert!(err < 1e-12, "n={n} frac={frac} err={err}");
                 // Refactor of the masked matrix gives the same factor.
                 let mut lr = vec![0.0; env.len()];
-                env.factor_from(&a, &tight, &mut lr, 0, 1.0);
+                env.factor_from(&a, &tight, &mut lr, 0, a.max_diag());
                 let err = (dense_of(&env, &lr) - &reference).norm() / reference.norm();
                 assert!(err < 1e-13, "refactor n={n} frac={frac} err={err}");
             }
@@ -467,7 +467,7 @@ mod tests {
         let mut env = Envelope::new();
         env.build(&a);
         let mut l = vec![0.0; env.len()];
-        env.factor_from(&a, &[false; 80], &mut l, 0, 1.0);
+        env.factor_from(&a, &[false; 80], &mut l, 0, a.max_diag());
         let mut sigma = vec![0.0; n];
         let mut tight = vec![false; n];
         for &i in &[70, 3, 41, 40, 79, 0] {
@@ -488,7 +488,7 @@ mod tests {
         env.build(&a);
         let mut l = vec![0.0; env.len()];
         let mut tight: Vec<bool> = (0..n).map(|_| rng.random_range(0.0..1.0) < 0.2).collect();
-        env.factor_from(&a, &tight, &mut l, 0, 1.0);
+        env.factor_from(&a, &tight, &mut l, 0, a.max_diag());
         for _ in 0..20 {
             // Flip a few indices, all at or after c.
             let c = rng.random_range(0..n);
@@ -497,7 +497,7 @@ mod tests {
                 tight[i] = !tight[i];
             }
             let c_eff = (0..n).find(|&i| i >= c).unwrap();
-            env.factor_from(&a, &tight, &mut l, c_eff, 1.0);
+            env.factor_from(&a, &tight, &mut l, c_eff, a.max_diag());
             let reference = masked_reference(&d, &tight);
             let err = (dense_of(&env, &l) - &reference).norm() / reference.norm();
             assert!(err < 1e-12, "c={c} err={err}");
@@ -513,7 +513,7 @@ mod tests {
         env.build(&a);
         let tight: Vec<bool> = (0..n).map(|_| rng.random_range(0.0..1.0) < 0.25).collect();
         let mut l = vec![0.0; env.len()];
-        env.factor_from(&a, &tight, &mut l, 0, 1.0);
+        env.factor_from(&a, &tight, &mut l, 0, a.max_diag());
         let rhs: Vec<f64> = (0..n).map(|i| if tight[i] { 0.0 } else { (i as f64 * 0.37).cos() }).collect();
         let mut x = rhs.clone();
         env.solve(&l, &mut x);
@@ -535,7 +535,7 @@ mod tests {
         let mut env = Envelope::new();
         env.build(&a);
         let mut l = vec![0.0; env.len()];
-        env.factor_from(&a, &[false; 200], &mut l, 0, 1.0);
+        env.factor_from(&a, &[false; 200], &mut l, 0, a.max_diag());
         let mut sigma = vec![0.0; n];
         for i in [0, 50, 150, 199] {
             let mut lc = l.clone();

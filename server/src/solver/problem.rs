@@ -85,7 +85,9 @@ pub enum MlcpError {
         target: usize,
     },
     /// A friction row's coefficients must satisfy `−∞ < lo ≤ 0 ≤ hi < ∞`.
-    #[error("row {row}: friction coefficients must satisfy -inf < lo <= 0 <= hi < inf (lo = {lo}, hi = {hi})")]
+    #[error(
+        "row {row}: friction coefficients must satisfy -inf < lo <= 0 <= hi < inf (lo = {lo}, hi = {hi})"
+    )]
     FrictionCoefficients {
         /// The friction row.
         row: usize,
@@ -201,10 +203,7 @@ impl SymCsr {
             }
         }
         let find = |i: usize, j: usize| -> f64 {
-            entries
-                .binary_search_by_key(&(i, j), |&(a, b, _)| (a, b))
-                .map(|k| entries[k].2)
-                .unwrap_or(0.0)
+            entries.binary_search_by_key(&(i, j), |&(a, b, _)| (a, b)).map(|k| entries[k].2).unwrap_or(0.0)
         };
         let mut row_ptr = Vec::with_capacity(n + 1);
         let mut col = Vec::with_capacity(entries.len() + n);
@@ -469,10 +468,10 @@ impl Mlcp {
                 return Err(MlcpError::NonFiniteVector { vector: "lambda0", index: i, value: v });
             }
         }
-        if let Some(s) = &index0 {
-            if s.len() != n {
-                return Err(MlcpError::DimensionMismatch { what: "index0", expected: n, found: s.len() });
-            }
+        if let Some(s) = &index0
+            && s.len() != n
+        {
+            return Err(MlcpError::DimensionMismatch { what: "index0", expected: n, found: s.len() });
         }
         self.lambda0 = lambda0;
         self.index0 = index0;
@@ -631,7 +630,8 @@ mod tests {
     #[test]
     fn malformed_problems_are_typed_errors() {
         let inf = f64::INFINITY;
-        let mk = |b: Vec<f64>, lo: Vec<f64>, hi: Vec<f64>, f: Vec<Option<usize>>| Mlcp::new(spd2(), b, lo, hi, f);
+        let mk =
+            |b: Vec<f64>, lo: Vec<f64>, hi: Vec<f64>, f: Vec<Option<usize>>| Mlcp::new(spd2(), b, lo, hi, f);
         assert!(matches!(
             mk(vec![1.0], vec![0.0; 2], vec![inf; 2], vec![None; 2]),
             Err(MlcpError::DimensionMismatch { what: "b", .. })
@@ -678,8 +678,9 @@ mod tests {
     #[test]
     fn residual_uses_final_normal_impulse() {
         // Row 1 is friction on row 0 with mu = 0.5.
-        let p = Mlcp::new(spd2(), vec![3.0, 3.0], vec![0.0, -0.5], vec![f64::INFINITY, 0.5], vec![None, Some(0)])
-            .unwrap();
+        let p =
+            Mlcp::new(spd2(), vec![3.0, 3.0], vec![0.0, -0.5], vec![f64::INFINITY, 0.5], vec![None, Some(0)])
+                .unwrap();
         let mut w = [0.0; 2];
         // lambda_n = 1, friction at mu*lambda_n = 0.5 with w_1 = 1 + 1 - 3 = -1 <= 0: tight at upper is fine.
         // w_0 = 2 + 0.5 - 3 = -0.5: normal row not satisfied.

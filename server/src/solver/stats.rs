@@ -9,6 +9,9 @@ pub enum SolveStatus {
     /// The index set settled and the natural-map residual met the tolerance.
     #[default]
     Converged,
+    /// The index set settled but the residual stayed above the tolerance (regularized pivots of a
+    /// semidefinite `A`, or conditioning beyond double precision).
+    Inexact,
     /// The step cap was reached; `λ` is the iterate with the smallest residual seen.
     MaxSteps,
     /// The problem had no rows (or the output slice had the wrong length).
@@ -25,6 +28,7 @@ impl SolveStatus {
             SolveStatus::Converged => "converged",
             SolveStatus::MaxSteps => "max-steps",
             SolveStatus::Empty => "empty",
+            SolveStatus::Inexact => "inexact",
             SolveStatus::NonFinite => "non-finite",
         }
     }

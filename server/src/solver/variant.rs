@@ -79,16 +79,15 @@ impl fmt::Display for Variant {
 
 /// A variant name that is not known.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
-#[error("unknown solver variant '{0}' (known: full, downdate, skyline, skyline-refactor, incremental, auto, pgs)")]
+#[error(
+    "unknown solver variant '{0}' (known: full, downdate, skyline, skyline-refactor, incremental, auto, pgs)"
+)]
 pub struct UnknownVariant(pub String);
 
 impl FromStr for Variant {
     type Err = UnknownVariant;
     fn from_str(s: &str) -> Result<Self, Self::Err> {
-        Variant::ALL
-            .into_iter()
-            .find(|v| v.name() == s)
-            .ok_or_else(|| UnknownVariant(s.to_string()))
+        Variant::ALL.into_iter().find(|v| v.name() == s).ok_or_else(|| UnknownVariant(s.to_string()))
     }
 }
 

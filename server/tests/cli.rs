@@ -1,0 +1,80 @@
+//! The `pivotsim-server solve` command as a user runs it: JSON keys, solution file, located errors.
+
+use std::path::PathBuf;
+use std::process::Command;
+
+fn bin() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_pivotsim-server"))
+}
+
+fn example() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../scenes/mlcp/crane430.txt")
+}
+
+#[test]
+fn solve_json_has_the_documented_keys_and_writes_the_solution() {
+    let dir = std::env::temp_dir().join(format!("pivotsim-cli-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let sol = dir.join("lambda.txt");
+    let out = bin()
+        .args(["solve", example().to_str().unwrap(), "--variant", "auto", "--json", "--solution"])
+        .arg(&sol)
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    for key in [
+        "n",
+        "variant",
+        "status",
+        "pivot_steps",
+        "tight",
+        "residual",
+        "residual_rel",
+        "time_us",
+        "factor_us",
+        "downdate_us",
+        "solve_us",
+        "bandwidth",
+        "envelope",
+        "regularized",
+    ] {
+        assert!(v.get(key).is_some(), "missing key {key}");
+    }
+    assert_eq!(v["n"], 430);
+    assert_eq!(v["status"], "converged");
+    assert!(v["residual_rel"].as_f64().unwrap() <= 1e-9);
+    // The solution file holds λ in the problem's order: its residual must be the reported one.
+    let text = std::fs::read_to_string(&sol).unwrap();
+    let lambda = pivotsim_server::solver::io::parse_solution(&text).unwrap();
+    let p = pivotsim_server::solver::io::read_mlcp_file(&example()).unwrap();
+    let mut w = vec![0.0; p.n()];
+    let (_, rel) = p.natural_residual(&lambda, &mut w);
+    assert!((rel - v["residual_rel"].as_f64().unwrap()).abs() <= 1e-12);
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn every_variant_name_is_accepted_and_unknown_ones_are_refused() {
+    for v in ["full", "downdate", "skyline", "skyline-refactor", "incremental", "auto", "pgs"] {
+        let out =
+            bin().args(["solve", example().to_str().unwrap(), "--variant", v, "--json"]).output().unwrap();
+        assert!(out.status.success(), "{v}: {}", String::from_utf8_lossy(&out.stderr));
+    }
+    let out = bin().args(["solve", example().to_str().unwrap(), "--variant", "dantzig"]).output().unwrap();
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("dantzig"));
+}
+
+#[test]
+fn a_broken_file_is_a_located_error() {
+    let dir = std::env::temp_dir().join(format!("pivotsim-cli-bad-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let bad = dir.join("bad.txt");
+    std::fs::write(&bad, "# comment\n2 0\n1 0\n0 x\n1 1\n0 0\ninf inf\n-1 -1\n").unwrap();
+    let out = bin().args(["solve", bad.to_str().unwrap()]).output().unwrap();
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("line 4"), "{err}");
+    std::fs::remove_dir_all(&dir).ok();
+}

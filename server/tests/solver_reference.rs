@@ -1,0 +1,173 @@
+//! Every exact solver variant against independent references: brute-force enumeration of index
+//! sets on small boxed LCPs, agreement between variants on random SPD problems up to m = 1000, and
+//! a property test on random small problems. The solution of a boxed LCP with SPD `A` and fixed
+//! bounds is unique, so every exact variant must return the same `λ`.
+
+mod common;
+
+use common::{banded_problem, random_problem};
+use pivotsim_server::solver::reference::enumerate_solutions;
+use pivotsim_server::solver::{Mlcp, OrderingKind, SolveStatus, Solver, SolverOptions, Variant};
+use proptest::prelude::*;
+
+fn solve(p: &Mlcp, variant: Variant, max_steps: usize) -> (Vec<f64>, pivotsim_server::solver::SolveStats) {
+    let mut s = Solver::new(SolverOptions { variant, max_steps, ..Default::default() });
+    let mut lam = vec![0.0; p.n()];
+    let st = s.solve(p, &mut lam).clone();
+    (lam, st)
+}
+
+fn max_diff(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| (x - y).abs()).fold(0.0, f64::max)
+}
+
+#[test]
+fn exact_variants_match_enumeration_without_friction() {
+    for seed in 0..40 {
+        let n = 2 + (seed as usize % 7);
+        let p = random_problem(n, seed, false, 0.5, 0.2);
+        let sols = enumerate_solutions(&p, 1e-9);
+        assert_eq!(sols.len(), 1, "seed {seed}: SPD boxed LCP must have one solution");
+        for v in Variant::EXACT {
+            let (lam, st) = solve(&p, v, 200);
+            assert_eq!(st.status, SolveStatus::Converged, "seed {seed} {v}");
+            let d = max_diff(&lam, &sols[0].lambda);
+            assert!(
+                d < 1e-9 * (1.0 + sols[0].lambda.iter().fold(0.0f64, |a, x| a.max(x.abs()))),
+                "seed {seed} {v}: {d}"
+            );
+        }
+    }
+}
+
+#[test]
+fn exact_variants_find_an_enumerated_solution_with_friction() {
+    let mut checked = 0;
+    for seed in 100..160 {
+        let n = 3 + (seed as usize % 6);
+        let p = random_problem(n, seed, true, 0.3, 0.5);
+        if !p.has_friction() {
+            continue;
+        }
+        let sols = enumerate_solutions(&p, 1e-9);
+        if sols.is_empty() {
+            continue;
+        }
+        for v in Variant::EXACT {
+            let (lam, st) = solve(&p, v, 1000);
+            assert_eq!(st.status, SolveStatus::Converged, "seed {seed} {v} residual {}", st.residual_rel);
+            assert!(st.residual_rel <= 1e-9, "seed {seed} {v}: {}", st.residual_rel);
+            let nearest = sols.iter().map(|s| max_diff(&lam, &s.lambda)).fold(f64::INFINITY, f64::min);
+            assert!(nearest < 1e-7, "seed {seed} {v}: no enumerated solution within {nearest}");
+        }
+        checked += 1;
+    }
+    assert!(checked >= 20, "only {checked} friction problems checked");
+}
+
+#[test]
+fn variants_agree_on_random_spd_problems_up_to_1000() {
+    for (n, seed) in [(50, 1), (200, 2), (500, 3), (1000, 4)] {
+        let p = banded_problem(n, 12, seed, 0.3);
+        let (reference, st) = solve(&p, Variant::Full, 1000);
+        assert_eq!(st.status, SolveStatus::Converged, "n={n}");
+        assert!(st.tight > 0, "n={n}: the test needs tight variables");
+        let scale = reference.iter().fold(1.0f64, |a, x| a.max(x.abs()));
+        for v in Variant::EXACT {
+            let (lam, st) = solve(&p, v, 1000);
+            assert_eq!(st.status, SolveStatus::Converged, "n={n} {v}");
+            let d = max_diff(&lam, &reference);
+            assert!(d <= 1e-9 * scale, "n={n} {v}: differs from full by {d}");
+            if v.uses_envelope() {
+                assert!(st.bandwidth_after < st.bandwidth_before, "n={n} {v}: RCM did not reduce bandwidth");
+            }
+        }
+    }
+}
+
+#[test]
+fn orderings_give_the_same_solution() {
+    let p = banded_problem(300, 8, 9, 0.4);
+    let (reference, _) = solve(&p, Variant::Full, 1000);
+    for ordering in [OrderingKind::Natural, OrderingKind::CuthillMcKee, OrderingKind::ReverseCuthillMcKee] {
+        let mut s = Solver::new(SolverOptions {
+            variant: Variant::Skyline,
+            ordering,
+            max_steps: 1000,
+            ..Default::default()
+        });
+        let mut lam = vec![0.0; p.n()];
+        assert_eq!(s.solve(&p, &mut lam).status, SolveStatus::Converged);
+        assert!(max_diff(&lam, &reference) < 1e-9);
+    }
+}
+
+#[test]
+fn warm_start_from_the_solution_takes_one_step() {
+    let p = banded_problem(200, 10, 5, 0.3);
+    let mut s = Solver::new(SolverOptions { variant: Variant::Auto, ..Default::default() });
+    let mut lam = vec![0.0; p.n()];
+    let cold = s.solve(&p, &mut lam).pivot_steps;
+    let warm = p.clone().with_warm_start(Some(lam.clone()), Some(s.index_set().to_vec())).unwrap();
+    let mut lam2 = vec![0.0; p.n()];
+    let st = s.solve(&warm, &mut lam2);
+    assert_eq!(st.status, SolveStatus::Converged);
+    assert_eq!(st.pivot_steps, 1, "cold start took {cold}");
+    assert!(max_diff(&lam, &lam2) < 1e-10);
+}
+
+#[test]
+fn deletion_error_is_small() {
+    let p = banded_problem(400, 20, 11, 0.5);
+    for v in [Variant::Downdate, Variant::Skyline, Variant::Auto] {
+        let mut s = Solver::new(SolverOptions {
+            variant: v,
+            measure_deletion_error: true,
+            max_steps: 1000,
+            ..Default::default()
+        });
+        let mut lam = vec![0.0; p.n()];
+        let st = s.solve(&p, &mut lam);
+        if st.deletions > 0 {
+            let e = st.deletion_error.expect("measured");
+            assert!(e <= 1e-11, "{v}: relative deletion error {e}");
+        }
+    }
+}
+
+#[test]
+fn step_cap_returns_the_best_iterate_with_a_status() {
+    let p = banded_problem(300, 10, 21, 0.8);
+    let (_, full) = solve(&p, Variant::Auto, 1000);
+    assert!(full.pivot_steps > 2, "needs a problem with several pivot steps");
+    let (lam, st) = solve(&p, Variant::Auto, 1);
+    assert_eq!(st.status, SolveStatus::MaxSteps);
+    assert!(lam.iter().all(|x| x.is_finite()));
+    // The reported residual is that of the returned λ.
+    let mut w = vec![0.0; p.n()];
+    let (r, _) = p.natural_residual(&lam, &mut w);
+    assert!((r - st.residual).abs() <= 1e-12 * (1.0 + r));
+}
+
+#[test]
+fn wrong_output_length_is_reported_not_a_panic() {
+    let p = random_problem(5, 1, false, 0.5, 0.2);
+    let mut s = Solver::new(SolverOptions::default());
+    let mut lam = vec![0.0; 4];
+    assert_eq!(s.solve(&p, &mut lam).status, SolveStatus::Empty);
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 64, .. ProptestConfig::default() })]
+    #[test]
+    fn random_small_boxed_problems(seed in 0u64..1_000_000, n in 1usize..8) {
+        let p = random_problem(n, seed, false, 0.4, 0.3);
+        let sols = enumerate_solutions(&p, 1e-9);
+        prop_assert_eq!(sols.len(), 1);
+        for v in [Variant::Full, Variant::Skyline, Variant::Auto, Variant::Incremental] {
+            let (lam, st) = solve(&p, v, 200);
+            prop_assert_eq!(st.status, SolveStatus::Converged);
+            prop_assert!(max_diff(&lam, &sols[0].lambda) < 1e-8);
+        }
+    }
+}
