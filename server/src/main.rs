@@ -46,6 +46,19 @@ enum Command {
         #[arg(long)]
         json: bool,
     },
+    /// Benchmark every solver variant: kernel crossover, paper Fig. 4, generated contact-like
+    /// problems and the shared data files; writes bench.md, bench.json and SVG plots.
+    BenchSolver {
+        /// Output directory (default: bench-out/).
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// Smaller sizes and fewer repeats (about a minute).
+        #[arg(long)]
+        quick: bool,
+        /// Scan this directory for *.txt MLCP files instead of the shared data directories.
+        #[arg(long)]
+        data: Option<PathBuf>,
+    },
 }
 
 fn main() -> ExitCode {
@@ -53,6 +66,10 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Some(Command::Solve { file, variant, max_steps, ordering, tol, solution, deletion_error, json }) => {
             solve(&file, variant, max_steps, ordering, tol, solution, deletion_error, json)
+        }
+        Some(Command::BenchSolver { out, quick, data }) => {
+            let cfg = pivotsim_server::bench::BenchConfig::new(out, quick, data);
+            pivotsim_server::bench::run(&cfg).map(|_| ())
         }
         None => {
             eprintln!(
@@ -108,7 +125,8 @@ fn solve(
             "tight_per_step": st.tight_per_step,
             "fallback": st.fallback,
             "murty_steps": st.murty_steps,
-            "line_search_steps": st.line_search_steps,
+            "proximal_iterations": st.proximal_iterations,
+            "projected_newton_steps": st.projected_newton_steps,
             "friction_updates": st.friction_updates,
             "coupled_steps": st.coupled_steps,
             "krylov_iterations": st.krylov_iterations,

@@ -39,11 +39,20 @@ static GLOBAL: Counting = Counting;
 fn second_solve_allocates_nothing() {
     let plain = common::banded_problem(300, 10, 3, 0.5);
     let friction = common::random_problem(60, 7, true, 0.1, 1.0);
-    for p in [&plain, &friction] {
+    // Paper-like islands exercise the projected-Newton safeguard and the coupled Newton update;
+    // Confeti (semidefinite) the proximal mode.
+    let shared = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../shared/data");
+    let extreme =
+        pivotsim_server::solver::io::read_mlcp_file(&shared.join("mlcp-scene/scene-extreme200.txt")).unwrap();
+    let confeti =
+        pivotsim_server::solver::io::read_mlcp_file(&shared.join("mlcp/Confeti-ex13-Fc3D-SBM.txt")).unwrap();
+    for p in [&plain, &friction, &extreme, &confeti] {
         for v in Variant::ALL {
-            let mut s = Solver::new(SolverOptions { variant: v, max_steps: 200, ..Default::default() });
+            let mut s = Solver::new(SolverOptions { variant: v, max_steps: 1000, ..Default::default() });
             let mut lam = vec![0.0; p.n()];
+            let first = ALLOCS.load(Ordering::Relaxed);
             s.solve(p, &mut lam);
+            assert!(ALLOCS.load(Ordering::Relaxed) > first, "{v}: the first solve must size the workspace");
             let before = ALLOCS.load(Ordering::Relaxed);
             let st = s.solve(p, &mut lam);
             let steps = st.pivot_steps;

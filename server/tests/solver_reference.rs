@@ -171,3 +171,25 @@ proptest! {
         }
     }
 }
+
+#[test]
+fn murty_fallback_reaches_the_same_solution() {
+    use pivotsim_server::solver::Fallback;
+    for (n, seed) in [(120, 31), (300, 32)] {
+        let p = banded_problem(n, 10, seed, 0.6);
+        let (reference, _) = solve(&p, Variant::Full, 1000);
+        for v in [Variant::Full, Variant::Skyline, Variant::Auto] {
+            let mut s = Solver::new(SolverOptions {
+                variant: v,
+                fallback: Fallback::Murty,
+                murty_after: 0,
+                max_steps: 5000,
+                ..Default::default()
+            });
+            let mut lam = vec![0.0; p.n()];
+            let st = s.solve(&p, &mut lam);
+            assert_eq!(st.status, SolveStatus::Converged, "n={n} {v}");
+            assert!(max_diff(&lam, &reference) < 1e-9, "n={n} {v}");
+        }
+    }
+}

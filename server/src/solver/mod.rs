@@ -25,7 +25,7 @@ pub mod reference;
 mod stats;
 mod variant;
 
-pub use bpp::{FrictionStrategy, Solver, SolverOptions};
+pub use bpp::{Fallback, Solver, SolverOptions};
 pub use problem::{IndexState, Mlcp, MlcpError, SymCsr, effective_bounds, natural_residual};
 pub use stats::{SolveStats, SolveStatus};
 pub use variant::{OrderingKind, UnknownVariant, Variant};

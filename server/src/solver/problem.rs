@@ -325,6 +325,22 @@ impl SymCsr {
         }
     }
 
+    /// Copies the diagonal into `out` (resized to `n`).
+    pub fn diagonal_into(&self, out: &mut Vec<f64>) {
+        out.clear();
+        out.extend((0..self.n).map(|i| self.get(i, i)));
+    }
+
+    /// Overwrites the (always stored) diagonal with `d`.
+    pub fn set_diagonal(&mut self, d: &[f64]) {
+        for (i, &di) in d.iter().enumerate().take(self.n) {
+            let r = self.row_ptr[i]..self.row_ptr[i + 1];
+            if let Ok(k) = self.col[r.clone()].binary_search(&i) {
+                self.val[r.start + k] = di;
+            }
+        }
+    }
+
     /// Largest diagonal entry (1 for an empty matrix).
     pub fn max_diag(&self) -> f64 {
         (0..self.n).map(|i| self.get(i, i)).fold(0.0, f64::max).max(if self.n == 0 { 1.0 } else { 0.0 })

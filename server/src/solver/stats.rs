@@ -65,15 +65,17 @@ pub struct SolveStats {
     pub tight_per_step: Vec<u32>,
     /// Tight count of the returned solution.
     pub tight: usize,
-    /// Whether Murty's single-pivot fallback ran.
+    /// Whether a fallback (Murty or projected Newton) ran.
     pub fallback: bool,
     /// Murty single-pivot steps taken.
     pub murty_steps: usize,
-    /// Steps whose Newton point was damped by the line search (friction-coupled problems).
-    pub line_search_steps: usize,
-    /// Outer friction-bound updates (`FrictionStrategy::Outer`).
+    /// Proximal point iterations (semidefinite `A`).
+    pub proximal_iterations: usize,
+    /// Projected-Newton safeguard steps taken.
+    pub projected_newton_steps: usize,
+    /// Outer friction-bound updates.
     pub friction_updates: usize,
-    /// Steps that took the exact coupled Newton point (GMRES preconditioned by the factor).
+    /// Outer updates that took the exact coupled Newton point (GMRES preconditioned by the factor).
     pub coupled_steps: usize,
     /// GMRES iterations of those steps.
     pub krylov_iterations: usize,

@@ -1,0 +1,351 @@
+//! Factor strategies of the variants (paper Alg. 1, 2, 3 and ours): the initial factor, the factor
+//! of `A_FF ⊕ I_TT` for each pivot step (refactor, copy + deletions, incremental, or the cheapest
+//! predicted by `auto`), the triangular solves, `w = Aλ − b` and iterative refinement.
+
+use std::time::Instant;
+
+use super::super::{IndexState, Variant, dense, natural_residual};
+use super::{FactorIn, Solver, resize, us};
+
+impl Solver {
+    /// Computes what every later step reuses: the dense `L₀`, the envelope and its `L₀`.
+    pub(super) fn prepare(&mut self, variant: Variant) {
+        let m = self.ap.n();
+        match variant {
+            Variant::Full => {
+                self.stats.factor_entries = m * (m + 1) / 2;
+            }
+            Variant::Downdate => {
+                resize(&mut self.dense_l0, m * m);
+                self.ap.to_dense(&mut self.dense_l0);
+                self.stats.regularized += dense::cholesky_in_place(&mut self.dense_l0, m, self.max_diag);
+                resize(&mut self.dense_l, m * m);
+                self.stats.factor_entries = m * (m + 1) / 2;
+            }
+            Variant::Skyline | Variant::SkylineRefactor | Variant::Incremental | Variant::Auto => {
+                self.env.build(&self.ap);
+                let len = self.env.len();
+                self.stats.factor_entries = len;
+                resize(&mut self.l, len);
+                if matches!(variant, Variant::Skyline | Variant::Auto) {
+                    resize(&mut self.l0, len);
+                    self.tmp_tight_clear();
+                    self.stats.regularized +=
+                        self.env.factor_from(&self.ap, &self.tmp_tight, &mut self.l0, 0, self.max_diag);
+                }
+            }
+            Variant::Pgs => {}
+        }
+        if self.opts.measure_deletion_error {
+            let n = if variant == Variant::Downdate { m * m } else { self.env.len() };
+            resize(&mut self.lref, n);
+        }
+    }
+
+    pub(super) fn tmp_tight_clear(&mut self) {
+        self.tmp_tight.clear();
+        self.tmp_tight.resize(self.ap.n(), false);
+    }
+
+    /// Sets `λ_T` to the frozen bounds, solves eq. 6 with the variant's factor, computes `w`.
+    pub(super) fn pivot_solve(&mut self, variant: Variant) -> FactorIn {
+        let m = self.ap.n();
+        // λ_T at the bounds; rhs = b − A_{·T} λ_T, zero on T.
+        for i in 0..m {
+            match self.state[i] {
+                IndexState::Free => self.tmp[i] = 0.0,
+                IndexState::Lower => {
+                    self.lam[i] = self.lo_eff[i];
+                    self.tmp[i] = self.lam[i];
+                }
+                IndexState::Upper => {
+                    self.lam[i] = self.hi_eff[i];
+                    self.tmp[i] = self.lam[i];
+                }
+            }
+        }
+        let t = Instant::now();
+        self.ap.mul_vec(&self.tmp, &mut self.rhs);
+        for i in 0..m {
+            self.rhs[i] = if self.tight[i] { 0.0 } else { self.bp[i] - self.rhs[i] };
+        }
+        self.stats.solve_us += us(t);
+
+        let which = self.factor_for(variant);
+        self.last_factor = which;
+
+        let t = Instant::now();
+        self.solve_with(which);
+        for i in 0..m {
+            if !self.tight[i] {
+                self.lam[i] = self.rhs[i];
+            }
+        }
+        self.compute_w();
+        self.stats.solve_us += us(t);
+        which
+    }
+
+    /// Brings a factor of `A_FF ⊕ I_TT` for the current `tight` into one of the buffers.
+    pub(super) fn factor_for(&mut self, variant: Variant) -> FactorIn {
+        let m = self.ap.n();
+        let any_tight = self.tight.iter().any(|&t| t);
+        match variant {
+            Variant::Full => {
+                let t = Instant::now();
+                self.free_idx.clear();
+                self.free_idx.extend((0..m).filter(|&i| !self.tight[i]));
+                let k = self.free_idx.len();
+                // Position of each free index in the compact system (reuse `sigma` as a map).
+                for (q, &i) in self.free_idx.iter().enumerate() {
+                    self.sigma[i] = q as f64;
+                }
+                resize(&mut self.compact, k * k);
+                for (q, &i) in self.free_idx.iter().enumerate() {
+                    let (cols, vals) = self.ap.row(i);
+                    for (&j, &v) in cols.iter().zip(vals) {
+                        if !self.tight[j] {
+                            self.compact[q * k + self.sigma[j] as usize] = v;
+                        }
+                    }
+                }
+                self.sigma.fill(0.0);
+                self.stats.regularized += dense::cholesky_in_place(&mut self.compact, k, self.max_diag);
+                self.stats.factor_us += us(t);
+                FactorIn::Compact
+            }
+            Variant::Downdate => {
+                if !any_tight {
+                    return FactorIn::L0;
+                }
+                let t = Instant::now();
+                self.dense_l.copy_from_slice(&self.dense_l0);
+                for i in 0..m {
+                    if self.tight[i] {
+                        dense::delete_in_place(&mut self.dense_l, m, i, &mut self.sigma);
+                        self.stats.deletions += 1;
+                    }
+                }
+                self.sigma.fill(0.0);
+                self.stats.downdate_us += us(t);
+                self.measure_error(true);
+                FactorIn::L
+            }
+            Variant::Skyline => {
+                if !any_tight {
+                    return FactorIn::L0;
+                }
+                self.delete_from_l0();
+                FactorIn::L
+            }
+            Variant::SkylineRefactor => {
+                let t = Instant::now();
+                self.stats.regularized +=
+                    self.env.factor_from(&self.ap, &self.tight, &mut self.l, 0, self.max_diag);
+                self.stats.factor_us += us(t);
+                FactorIn::L
+            }
+            Variant::Incremental => {
+                self.incremental();
+                FactorIn::L
+            }
+            Variant::Auto => {
+                if !any_tight {
+                    return FactorIn::L0;
+                }
+                if self.l_valid && self.tight == self.tight_l {
+                    return FactorIn::L;
+                }
+                let (wd, wc, wf) = self.opts.auto_weights;
+                // (a) deletions from L₀.
+                let tmin = self.tight.iter().position(|&t| t).unwrap_or(m);
+                let del_all: f64 = (0..m).filter(|&i| self.tight[i]).map(|i| self.env.cost_delete(i)).sum();
+                let lmin = if self.l_valid { self.tight_l.iter().position(|&t| t).unwrap_or(m) } else { 0 };
+                let cost_a =
+                    wc * self.env.cost_copy_from(self.env.first_column_of_row(tmin.min(lmin))) + wd * del_all;
+                // (b) further deletions from the current factor, when T only grew.
+                let grew = self.l_valid && (0..m).all(|i| !self.tight_l[i] || self.tight[i]);
+                let cost_b = if grew {
+                    wd * (0..m)
+                        .filter(|&i| self.tight[i] && !self.tight_l[i])
+                        .map(|i| self.env.cost_delete(i))
+                        .sum::<f64>()
+                } else {
+                    f64::INFINITY
+                };
+                // (c) incremental refactor from the first change (a full refactor when L is stale).
+                let c = if self.l_valid {
+                    (0..m).position(|i| self.tight[i] != self.tight_l[i]).unwrap_or(m)
+                } else {
+                    0
+                };
+                let cost_c = wf * self.env.cost_factor_from(c);
+                if cost_b <= cost_a && cost_b <= cost_c {
+                    self.stats.auto_choices[1] += 1;
+                    let t = Instant::now();
+                    for i in 0..m {
+                        if self.tight[i] && !self.tight_l[i] {
+                            self.env.delete(&mut self.l, i, &mut self.sigma);
+                            self.stats.deletions += 1;
+                        }
+                    }
+                    self.tight_l.copy_from_slice(&self.tight);
+                    self.stats.downdate_us += us(t);
+                    self.measure_error(false);
+                } else if cost_a <= cost_c {
+                    self.stats.auto_choices[0] += 1;
+                    self.delete_from_l0();
+                } else {
+                    self.stats.auto_choices[2] += 1;
+                    self.incremental();
+                }
+                FactorIn::L
+            }
+            Variant::Pgs => unreachable!("pgs does not pivot"),
+        }
+    }
+
+    /// `skyline`: copy the columns of `L₀` from `min T` on, then delete every tight index.
+    pub(super) fn delete_from_l0(&mut self) {
+        let m = self.ap.n();
+        let t = Instant::now();
+        let tmin = self.tight.iter().position(|&t| t).unwrap_or(m);
+        if self.l_valid {
+            // Deleting i writes columns g_i.. only (row i is zeroed from g_i on), so the columns
+            // before g_{min(T ∪ T_L)} are identical in L and L₀.
+            let lmin = self.tight_l.iter().position(|&t| t).unwrap_or(m);
+            self.env.copy_from_column(&self.l0, &mut self.l, self.env.first_column_of_row(tmin.min(lmin)));
+        } else {
+            self.env.copy_from_column(&self.l0, &mut self.l, 0);
+        }
+        for i in tmin..m {
+            if self.tight[i] {
+                self.env.delete(&mut self.l, i, &mut self.sigma);
+                self.stats.deletions += 1;
+            }
+        }
+        self.tight_l.copy_from_slice(&self.tight);
+        self.l_valid = true;
+        self.stats.downdate_us += us(t);
+        self.measure_error(false);
+    }
+
+    /// `incremental`: refactor the masked matrix from the first index whose state changed.
+    pub(super) fn incremental(&mut self) {
+        let m = self.ap.n();
+        let t = Instant::now();
+        let c =
+            if self.l_valid { (0..m).position(|i| self.tight[i] != self.tight_l[i]).unwrap_or(m) } else { 0 };
+        self.stats.regularized += self.env.factor_from(&self.ap, &self.tight, &mut self.l, c, self.max_diag);
+        self.tight_l.copy_from_slice(&self.tight);
+        self.l_valid = true;
+        self.stats.factor_us += us(t);
+    }
+
+    /// Deletion error against a refactor from scratch (paper Table 4), outside the timings.
+    pub(super) fn measure_error(&mut self, dense_storage: bool) {
+        if !self.opts.measure_deletion_error {
+            return;
+        }
+        let m = self.ap.n();
+        let (abs, norm) = if dense_storage {
+            // Dense: refactor the masked matrix densely.
+            self.ap.to_dense(&mut self.lref);
+            for i in 0..m {
+                if self.tight[i] {
+                    for j in 0..m {
+                        self.lref[i * m + j] = 0.0;
+                        self.lref[j * m + i] = 0.0;
+                    }
+                    self.lref[i * m + i] = 1.0;
+                }
+            }
+            dense::cholesky_in_place(&mut self.lref, m, self.max_diag);
+            let abs = dense::frobenius_diff(&self.dense_l, &self.lref, m);
+            let norm = (0..m)
+                .map(|j| self.lref[j * m + j..j * m + m].iter().map(|x| x * x).sum::<f64>())
+                .sum::<f64>();
+            (abs, norm.sqrt())
+        } else {
+            self.env.factor_from(&self.ap, &self.tight, &mut self.lref, 0, self.max_diag);
+            (self.env.frobenius_diff(&self.l, &self.lref), self.env.frobenius(&self.lref))
+        };
+        let rel = abs / norm.max(f64::MIN_POSITIVE);
+        let cur = self.stats.deletion_error.unwrap_or(0.0);
+        self.stats.deletion_error = Some(cur.max(rel));
+        let cur = self.stats.deletion_error_abs.unwrap_or(0.0);
+        self.stats.deletion_error_abs = Some(cur.max(abs));
+    }
+
+    /// Solves in place on `rhs` with the factor held in `which`.
+    pub(super) fn solve_with(&mut self, which: FactorIn) {
+        let m = self.ap.n();
+        match (self.opts.variant, which) {
+            (_, FactorIn::Compact) => {
+                let k = self.free_idx.len();
+                for (q, &i) in self.free_idx.iter().enumerate() {
+                    self.tmp[q] = self.rhs[i];
+                }
+                dense::solve_in_place(&self.compact, k, &mut self.tmp[..k]);
+                for (q, &i) in self.free_idx.iter().enumerate() {
+                    self.rhs[i] = self.tmp[q];
+                }
+            }
+            (Variant::Downdate, FactorIn::L0) => dense::solve_in_place(&self.dense_l0, m, &mut self.rhs),
+            (Variant::Downdate, FactorIn::L) => dense::solve_in_place(&self.dense_l, m, &mut self.rhs),
+            (_, FactorIn::L0) => self.env.solve(&self.l0, &mut self.rhs),
+            (_, FactorIn::L) => self.env.solve(&self.l, &mut self.rhs),
+        }
+    }
+
+    /// `w = Aλ − b` in the permuted order.
+    pub(super) fn compute_w(&mut self) {
+        self.ap.mul_vec(&self.lam, &mut self.w);
+        for (w, b) in self.w.iter_mut().zip(&self.bp) {
+            *w -= b;
+        }
+    }
+
+    /// One step of iterative refinement on the free system `A_FF λ_F = b_F − A_FT λ_T`.
+    /// Up to three refinement steps while they reduce the residual (ill-conditioned `A_FF`).
+    pub(super) fn refine_until_converged(&mut self, mut res_rel: f64) {
+        for _ in 0..3 {
+            if res_rel <= self.opts.tol_rel {
+                return;
+            }
+            self.best.copy_from_slice(&self.lam);
+            self.refine_free();
+            let (_, r) = natural_residual(&self.lam, &self.w, &self.lop, &self.hip, &self.fip);
+            if r.is_nan() || r >= res_rel {
+                self.lam.copy_from_slice(&self.best);
+                self.compute_w();
+                return;
+            }
+            res_rel = r;
+        }
+    }
+
+    pub(super) fn refine_free(&mut self) {
+        let m = self.ap.n();
+        let t = Instant::now();
+        // Residual of the free rows: −w_F.
+        for i in 0..m {
+            self.rhs[i] = if self.tight[i] { 0.0 } else { -self.w[i] };
+        }
+        let which = match self.opts.variant {
+            Variant::Full => FactorIn::Compact,
+            Variant::Downdate | Variant::Skyline | Variant::Auto if !self.tight.iter().any(|&t| t) => {
+                FactorIn::L0
+            }
+            _ => FactorIn::L,
+        };
+        self.solve_with(which);
+        for i in 0..m {
+            if !self.tight[i] {
+                self.lam[i] += self.rhs[i];
+            }
+        }
+        self.compute_w();
+        self.stats.solve_us += us(t);
+    }
+}

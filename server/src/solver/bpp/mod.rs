@@ -1,0 +1,537 @@
+//! Block principal pivoting (Júdice–Pires 1994; paper §3.1–3.3, eq. 4–6, Alg. 1 and 2) with the
+//! factor strategies of [`Variant`], a monotone safeguard, friction coupling and a proximal mode for
+//! semidefinite `A`.
+//!
+//! **One pivot step.** For the index set `(F, T_lo, T_hi)` set `λ_T` to its bounds and solve
+//! `A_FF λ_F = b_F − A_FT λ_T` (eq. 6), then `w = Aλ − b` (eq. 5). A variable is *infeasible* when
+//! `i ∈ F` and `λ_i ∉ [lo_i, hi_i]`, `i ∈ T_lo` and `w_i < 0`, or `i ∈ T_hi` and `w_i > 0`; the block
+//! pivot moves every infeasible variable to the set eq. 4 names. A block pivot is exactly a full
+//! semismooth Newton step on the natural map `r(λ) = λ − clamp(λ − w, lo, hi)`.
+//!
+//! **Safeguard.** When the number of infeasible variables has not decreased for `murty_after`
+//! steps, either Murty's rule pivots only the infeasible variable of largest index (Júdice–Pires:
+//! finite for SPD `A` and fixed bounds, [`Fallback::Murty`]), or — the default,
+//! [`Fallback::ProjectedNewton`] — projected Newton on the strictly convex box QP whose optimality
+//! system the boxed LCP is (`safeguard.rs`): monotone in the QP objective, every step a pivot step
+//! with the same factor reuse, ending on an exact pivot step. On the paper-like islands Murty needed
+//! more than 900 single pivots where projected Newton needs tens of steps.
+//!
+//! **Friction coupling.** Friction bounds `±μ λ_n` move with the normal impulses; pivoting with
+//! bounds that change at every step cycles (measured on `shared/data/mlcp-scene`). We freeze the
+//! bounds at the current normal impulses and solve that boxed LCP exactly; then, with the settled
+//! index set, take the exact coupled Newton point in which tight friction rows follow their free
+//! normal impulse (`coupled.rs`: GMRES preconditioned by the factor at hand), update the bounds
+//! from it and continue from the same index set. This is Newton's method on the outer fixed point
+//! `λ_n ↦ λ_n(bounds(λ_n))`; it needed 1–12 outer updates on every shared problem where the plain
+//! fixed point (ODE/Bullet style) stalled. The factor of `A` is computed once and reused by every
+//! step. Every iterate is judged by the natural-map residual against the bounds at its own normal
+//! impulses; a solve that hits the step cap returns the iterate with the smallest residual seen.
+//!
+//! **Semidefinite `A`.** When the factorization has to regularize pivots, the solve switches to
+//! proximal point iterations on `A + ρI` (`safeguard.rs`), judged against the original problem.
+//!
+//! **Factor strategies** (`factor.rs`). `full`: gather and factor the compact `A_FF` each step.
+//! `downdate`: dense `L₀ = chol(A)` once, per step copy + deletions (`dense.rs`). `skyline`: reorder
+//! (CM/RCM), envelope `L₀`, per step copy of the columns from `g_{min T}` on + deletions on the
+//! skyline (`envelope.rs`). `skyline-refactor`: envelope factor of `A_FF ⊕ I` per step.
+//! `incremental`: keep the last factor and refactor from the first index whose state changed.
+//! `auto`: per step the cheapest predicted of deletions from `L₀`, deletions from the last factor
+//! (when `T` only grew) and the incremental refactor, from the skyline cost model.
+
+mod coupled;
+mod factor;
+mod safeguard;
+
+use std::time::Instant;
+
+use super::envelope::Envelope;
+use super::ordering::{self, OrderingWorkspace};
+use super::pgs::{PgsOptions, PgsWorkspace, pgs_solve};
+use super::{IndexState, Mlcp, OrderingKind, SolveStats, SolveStatus, SymCsr, Variant, effective_bounds};
+
+/// Options of a [`Solver`].
+#[derive(Debug, Clone, Copy)]
+pub struct SolverOptions {
+    /// Factor strategy.
+    pub variant: Variant,
+    /// Reordering for the envelope variants (dense variants and PGS keep the input order).
+    pub ordering: OrderingKind,
+    /// Cap on pivot steps (paper: 35).
+    pub max_steps: usize,
+    /// Relative natural-map residual at which a solve is converged.
+    pub tol_rel: f64,
+    /// Steps without a decrease of the infeasible count before Murty's single pivot.
+    pub murty_after: usize,
+    /// Measure `‖L_deleted − chol(A_FF)‖_F` at every deletion step (costly; for Table 4).
+    pub measure_deletion_error: bool,
+    /// One step of iterative refinement on the final free system.
+    pub refine: bool,
+    /// Options of the `pgs` variant.
+    pub pgs: PgsOptions,
+    /// Safeguard when block pivoting stalls.
+    pub fallback: Fallback,
+    /// Switch to proximal point iterations when the factorization had to regularize pivots
+    /// (semidefinite `A`).
+    pub proximal: bool,
+    /// Outer friction updates take the exact coupled Newton point of the settled index set (GMRES
+    /// preconditioned by the factor) instead of the plain fixed-point update.
+    pub coupled_update: bool,
+    /// Relative weights of the `auto` cost model: (deleted entry, copied entry, factor multiply–add).
+    pub auto_weights: (f64, f64, f64),
+}
+
+impl Default for SolverOptions {
+    fn default() -> Self {
+        SolverOptions {
+            variant: Variant::Skyline,
+            ordering: OrderingKind::ReverseCuthillMcKee,
+            max_steps: 35,
+            tol_rel: 1e-10,
+            murty_after: 3,
+            measure_deletion_error: false,
+            refine: true,
+            pgs: PgsOptions::default(),
+            fallback: Fallback::ProjectedNewton,
+            coupled_update: true,
+            proximal: true,
+            auto_weights: (3.0, 0.25, 1.0),
+        }
+    }
+}
+
+/// What the block pivoting does when the number of infeasible variables stops decreasing.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Fallback {
+    /// Murty's single pivot on the infeasible variable of largest index (Júdice–Pires): finite for
+    /// SPD `A` and fixed bounds, but may need very many steps.
+    Murty,
+    /// Projected Newton with an Armijo search on the box QP: monotone, finite identification of
+    /// the active set, each step a pivot step with the same factor reuse.
+    #[default]
+    ProjectedNewton,
+}
+
+/// Which buffer holds the factor of the current index set.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+enum FactorIn {
+    #[default]
+    L0,
+    L,
+    Compact,
+}
+
+/// A reusable solver: buffers are sized by the first solve of a given size and reused afterwards
+/// (no heap allocation per solve once warm).
+#[derive(Debug, Default)]
+pub struct Solver {
+    opts: SolverOptions,
+    stats: SolveStats,
+    ord_ws: OrderingWorkspace,
+    perm: Vec<usize>,
+    inv: Vec<usize>,
+    ap: SymCsr,
+    bp: Vec<f64>,
+    lop: Vec<f64>,
+    hip: Vec<f64>,
+    fip: Vec<Option<usize>>,
+    lam: Vec<f64>,
+    kry_v: Vec<f64>,
+    kry_h: Vec<f64>,
+    kry_g: Vec<f64>,
+    kry_cs: Vec<f64>,
+    kry_sn: Vec<f64>,
+    kry_z: Vec<f64>,
+    lam_old: Vec<f64>,
+    lam_hat: Vec<f64>,
+    w_old: Vec<f64>,
+    w: Vec<f64>,
+    best: Vec<f64>,
+    rhs: Vec<f64>,
+    tmp: Vec<f64>,
+    lo_eff: Vec<f64>,
+    hi_eff: Vec<f64>,
+    state: Vec<IndexState>,
+    tight: Vec<bool>,
+    tight_l: Vec<bool>,
+    tmp_tight: Vec<bool>,
+    l_valid: bool,
+    infeasible: Vec<usize>,
+    env: Envelope,
+    l0: Vec<f64>,
+    l: Vec<f64>,
+    lref: Vec<f64>,
+    sigma: Vec<f64>,
+    dense_l0: Vec<f64>,
+    dense_l: Vec<f64>,
+    compact: Vec<f64>,
+    free_idx: Vec<usize>,
+    pgs_ws: PgsWorkspace,
+    out_state: Vec<IndexState>,
+    max_diag: f64,
+    non_finite: bool,
+    needs_prox: bool,
+    prox_shift: f64,
+    diag0: Vec<f64>,
+    bp0: Vec<f64>,
+    center: Vec<f64>,
+    prox_best: Vec<f64>,
+    last_factor: FactorIn,
+}
+
+impl Solver {
+    /// A solver with the given options.
+    pub fn new(opts: SolverOptions) -> Self {
+        Solver { opts, ..Default::default() }
+    }
+
+    /// Current options.
+    pub fn options(&self) -> &SolverOptions {
+        &self.opts
+    }
+
+    /// Changes the options (e.g. the variant, live).
+    pub fn set_options(&mut self, opts: SolverOptions) {
+        self.opts = opts;
+    }
+
+    /// Statistics of the last solve.
+    pub fn stats(&self) -> &SolveStats {
+        &self.stats
+    }
+
+    /// Index set of the last solution, in the problem's row order (warm start for the next solve).
+    pub fn index_set(&self) -> &[IndexState] {
+        &self.out_state
+    }
+
+    /// Solves `p`, writing `λ` (problem row order) into `lambda` (`lambda.len()` must be `m`;
+    /// a wrong length is reported as an `Empty` status with no work done).
+    pub fn solve(&mut self, p: &Mlcp, lambda: &mut [f64]) -> &SolveStats {
+        let t_start = Instant::now();
+        let m = p.n();
+        let variant = self.opts.variant;
+        let ordering = if variant.uses_envelope() { self.opts.ordering } else { OrderingKind::Natural };
+        self.stats.reset(variant, ordering, m, p.a().nnz());
+        if m == 0 || lambda.len() != m {
+            self.stats.status = SolveStatus::Empty;
+            self.out_state.clear();
+            return &self.stats;
+        }
+        if variant == Variant::Pgs {
+            self.solve_pgs(p, lambda);
+            self.stats.total_us = us(t_start);
+            return &self.stats;
+        }
+
+        // Ordering and permuted copy of the problem.
+        let t = Instant::now();
+        self.ord_ws.order(p.a(), ordering, &mut self.perm, &mut self.inv);
+        self.ap.permuted_from(p.a(), &self.perm, &self.inv);
+        self.stats.bandwidth_before = ordering::bandwidth(p.a());
+        self.stats.envelope_before = ordering::envelope(p.a());
+        self.stats.bandwidth_after = ordering::bandwidth(&self.ap);
+        self.stats.envelope_after = ordering::envelope(&self.ap);
+        resize(&mut self.bp, m);
+        resize(&mut self.lop, m);
+        resize(&mut self.hip, m);
+        self.fip.clear();
+        self.fip.resize(m, None);
+        for new in 0..m {
+            let old = self.perm[new];
+            self.bp[new] = p.b()[old];
+            self.lop[new] = p.lo()[old];
+            self.hip[new] = p.hi()[old];
+            self.fip[new] = p.findex()[old].map(|j| self.inv[j]);
+        }
+        self.stats.ordering_us = us(t);
+        self.max_diag = self.ap.max_diag();
+
+        for v in [&mut self.lam, &mut self.w, &mut self.best, &mut self.rhs, &mut self.tmp] {
+            resize(v, m);
+        }
+        resize(&mut self.lo_eff, m);
+        resize(&mut self.hi_eff, m);
+        resize(&mut self.sigma, m);
+        self.state.clear();
+        self.state.resize(m, IndexState::Free);
+        self.tight.clear();
+        self.tight.resize(m, false);
+        self.tight_l.clear();
+        self.tight_l.resize(m, false);
+        self.l_valid = false;
+        self.non_finite = false;
+        self.needs_prox = false;
+        self.prox_shift = 0.0;
+        self.best.fill(0.0);
+        if let Some(l0) = p.lambda0() {
+            for new in 0..m {
+                self.lam[new] = l0[self.perm[new]];
+            }
+        }
+        if let Some(s0) = p.index0() {
+            for new in 0..m {
+                let s = s0[self.perm[new]];
+                let ok = match s {
+                    IndexState::Free => true,
+                    IndexState::Lower => self.lop[new] > f64::NEG_INFINITY,
+                    IndexState::Upper => self.hip[new] < f64::INFINITY,
+                };
+                self.state[new] = if ok { s } else { IndexState::Free };
+                self.tight[new] = self.state[new].is_tight();
+            }
+        }
+
+        // Initial factor.
+        let t = Instant::now();
+        self.prepare(variant);
+        self.stats.factor_us += us(t);
+
+        let has_friction = self.fip.iter().any(Option::is_some);
+        let mut converged = self.bpp_loop(variant, has_friction, p.lambda0().is_some() || !has_friction);
+        if self.needs_prox {
+            converged = self.proximal_solve(variant, has_friction);
+        }
+        if !converged {
+            self.lam.copy_from_slice(&self.best);
+        }
+        // Final report against the true bounds, in the original order.
+        let t = Instant::now();
+        self.compute_w();
+        self.stats.solve_us += us(t);
+        let (res, res_rel) = super::natural_residual(&self.lam, &self.w, &self.lop, &self.hip, &self.fip);
+        self.stats.residual = res;
+        self.stats.residual_rel = res_rel;
+        self.stats.status = if converged && (res_rel <= self.opts.tol_rel || res == 0.0) {
+            SolveStatus::Converged
+        } else if converged {
+            SolveStatus::Inexact
+        } else if self.non_finite {
+            SolveStatus::NonFinite
+        } else {
+            SolveStatus::MaxSteps
+        };
+        self.out_state.clear();
+        self.out_state.resize(m, IndexState::Free);
+        let mut tight_final = 0;
+        for new in 0..m {
+            let old = self.perm[new];
+            lambda[old] = self.lam[new];
+            self.out_state[old] = self.state[new];
+            tight_final += self.state[new].is_tight() as usize;
+        }
+        self.stats.tight = tight_final;
+        self.stats.total_us = us(t_start);
+        &self.stats
+    }
+}
+
+impl Solver {
+    /// Júdice–Pires block pivoting with Murty's fallback for fixed bounds. Returns convergence.
+    pub(super) fn bpp_loop(&mut self, variant: Variant, friction: bool, bounds_known: bool) -> bool {
+        self.update_bounds();
+        // Without a warm-start λ the friction bounds are frozen at the first (all-free) solve.
+        let mut bounds_set = bounds_known;
+        let mut best_res = f64::INFINITY;
+        let mut best_ninf = usize::MAX;
+        let mut no_progress = 0;
+        let mut solved_by_fallback = false;
+        loop {
+            if !solved_by_fallback {
+                if self.stats.pivot_steps >= self.opts.max_steps {
+                    return false;
+                }
+                self.pivot_solve(variant);
+                self.record_step();
+                if self.stats.regularized > 0 && self.prox_shift == 0.0 && self.opts.proximal {
+                    // A is (numerically) singular: switch to proximal point iterations.
+                    self.needs_prox = true;
+                    return false;
+                }
+                if !bounds_set {
+                    self.update_bounds();
+                    bounds_set = true;
+                }
+            }
+            solved_by_fallback = false;
+            let (res, res_rel) = super::natural_residual(&self.lam, &self.w, &self.lop, &self.hip, &self.fip);
+            if !res_rel.is_finite() {
+                self.non_finite = true;
+                return false;
+            }
+            if res_rel < best_res {
+                best_res = res_rel;
+                self.best.copy_from_slice(&self.lam);
+            }
+            self.find_infeasible();
+            if self.infeasible.is_empty() {
+                // The boxed LCP with these bounds is solved exactly.
+                if res_rel <= self.opts.tol_rel || res == 0.0 {
+                    return true;
+                }
+                if friction && self.opts.coupled_update && self.coupled_newton(self.last_factor) {
+                    // Newton on the outer fixed point: with this index set, friction rows that are
+                    // tight against a free normal impulse follow it (exact coupled point).
+                    self.stats.coupled_steps += 1;
+                    let (r, rr) =
+                        super::natural_residual(&self.lam, &self.w, &self.lop, &self.hip, &self.fip);
+                    if rr.is_finite() && rr < best_res {
+                        best_res = rr;
+                        self.best.copy_from_slice(&self.lam);
+                    }
+                    if rr <= self.opts.tol_rel || r == 0.0 {
+                        return true;
+                    }
+                }
+                if friction && self.update_bounds() {
+                    // Outer iteration: friction bounds follow the new normal impulses.
+                    self.stats.friction_updates += 1;
+                    best_ninf = usize::MAX;
+                    no_progress = 0;
+                    continue;
+                }
+                // Bounds consistent: what is left is rounding. Iterative refinement.
+                if self.opts.refine {
+                    self.refine_until_converged(res_rel);
+                }
+                return true;
+            }
+            let ninf = self.infeasible.len();
+            let stalled = if ninf < best_ninf {
+                best_ninf = ninf;
+                no_progress = 0;
+                false
+            } else if no_progress < self.opts.murty_after {
+                no_progress += 1;
+                false
+            } else {
+                true
+            };
+            if !stalled {
+                for k in 0..self.infeasible.len() {
+                    let i = self.infeasible[k];
+                    self.pivot(i);
+                }
+                continue;
+            }
+            self.stats.fallback = true;
+            match self.opts.fallback {
+                Fallback::Murty => {
+                    self.stats.murty_steps += 1;
+                    let i = *self.infeasible.iter().max().expect("non-empty");
+                    self.pivot(i);
+                }
+                Fallback::ProjectedNewton => {
+                    if !self.projected_newton(variant) {
+                        return false;
+                    }
+                    solved_by_fallback = true;
+                    best_ninf = usize::MAX;
+                    no_progress = 0;
+                }
+            }
+        }
+    }
+
+    pub(super) fn record_step(&mut self) {
+        self.stats.pivot_steps += 1;
+        let ntight = self.tight.iter().filter(|&&t| t).count();
+        self.stats.tight_per_step.push(ntight as u32);
+    }
+
+    /// Freezes the bounds at the current normal impulses; returns whether any moved.
+    pub(super) fn update_bounds(&mut self) -> bool {
+        let m = self.ap.n();
+        let mut moved = false;
+        for i in 0..m {
+            let (lo, hi) = effective_bounds(self.lop[i], self.hip[i], self.fip[i], &self.lam);
+            let tol = 1e-14 * (1.0 + lo.abs().max(hi.abs()));
+            if self.fip[i].is_some()
+                && ((lo - self.lo_eff[i]).abs() > tol || (hi - self.hi_eff[i]).abs() > tol)
+            {
+                moved = true;
+            }
+            self.lo_eff[i] = lo;
+            self.hi_eff[i] = hi;
+        }
+        moved
+    }
+
+    /// Fills `infeasible` with the variables that violate eq. 4 against the frozen bounds.
+    pub(super) fn find_infeasible(&mut self) {
+        let m = self.ap.n();
+        let lam_scale = self.lam.iter().fold(0.0f64, |a, &x| a.max(x.abs()));
+        let b_scale = self.bp.iter().fold(0.0f64, |a, &x| a.max(x.abs()));
+        let tol_l = 1e-13 * lam_scale.max(f64::MIN_POSITIVE);
+        let tol_w = 1e-13 * b_scale.max(self.max_diag * lam_scale).max(f64::MIN_POSITIVE);
+        self.infeasible.clear();
+        for i in 0..m {
+            let (lo, hi) = (self.lo_eff[i], self.hi_eff[i]);
+            let bad = match self.state[i] {
+                IndexState::Free => self.lam[i] < lo - tol_l || self.lam[i] > hi + tol_l,
+                // A degenerate box (lo = hi) is satisfied by any w.
+                IndexState::Lower => lo < hi && self.w[i] < -tol_w,
+                IndexState::Upper => lo < hi && self.w[i] > tol_w,
+            };
+            if bad {
+                self.infeasible.push(i);
+            }
+        }
+    }
+
+    /// Moves variable `i` to the set eq. 4 names.
+    pub(super) fn pivot(&mut self, i: usize) {
+        let lam_i = self.lam[i];
+        let new = match self.state[i] {
+            IndexState::Free => {
+                if lam_i < self.lo_eff[i] {
+                    IndexState::Lower
+                } else {
+                    IndexState::Upper
+                }
+            }
+            IndexState::Lower | IndexState::Upper => IndexState::Free,
+        };
+        self.state[i] = new;
+        self.tight[i] = new.is_tight();
+    }
+
+    pub(super) fn solve_pgs(&mut self, p: &Mlcp, lambda: &mut [f64]) {
+        match p.lambda0() {
+            Some(l0) => lambda.copy_from_slice(l0),
+            None => lambda.fill(0.0),
+        }
+        let t = Instant::now();
+        let info = pgs_solve(p, lambda, &mut self.pgs_ws, &self.opts.pgs);
+        self.stats.solve_us = us(t);
+        self.stats.iterations = info.iterations;
+        self.stats.residual = info.residual;
+        self.stats.residual_rel = info.residual_rel;
+        self.stats.status = if info.converged { SolveStatus::Converged } else { SolveStatus::MaxSteps };
+        // Index set of the PGS iterate, for warm starts and reports.
+        let m = p.n();
+        self.out_state.clear();
+        let mut tight = 0;
+        for i in 0..m {
+            let (lo, hi) = p.bounds_at(i, lambda);
+            let s = if lambda[i] <= lo {
+                IndexState::Lower
+            } else if lambda[i] >= hi {
+                IndexState::Upper
+            } else {
+                IndexState::Free
+            };
+            tight += s.is_tight() as usize;
+            self.out_state.push(s);
+        }
+        self.stats.tight = tight;
+    }
+}
+
+pub(super) fn us(t: Instant) -> f64 {
+    t.elapsed().as_secs_f64() * 1e6
+}
+
+pub(super) fn resize(v: &mut Vec<f64>, m: usize) {
+    v.clear();
+    v.resize(m, 0.0);
+}

@@ -1,0 +1,173 @@
+//! Safeguards of the block pivoting: projected Newton on the box QP when the infeasible count
+//! stalls (fixed bounds), and proximal point iterations when `A` is only semidefinite.
+
+use std::time::Instant;
+
+use super::super::{IndexState, Variant, natural_residual};
+use super::{Solver, resize, us};
+
+impl Solver {
+    /// Safeguard of the block pivoting for *fixed* bounds: projected Newton (Bertsekas 1982) on the
+    /// strictly convex box QP `min ½λᵀAλ − bᵀλ, lo ≤ λ ≤ hi` that the boxed LCP is the optimality
+    /// system of. From a feasible `λ` the ε-binding set (at a bound with the gradient `w` pushing
+    /// outwards) is held fixed, the free variables take the Newton point `A_FF⁻¹(b_F − A_FT λ_T)`,
+    /// which is exactly the block pivoting step, and the step is projected onto the box and
+    /// backtracked until the objective decreases enough (Armijo). The objective decreases
+    /// monotonically, the binding set is identified in finitely many steps and the last step is an
+    /// exact pivot step; every step reuses the variant's factor strategy. Returns `false` when the
+    /// step cap is reached first; on `true`, `λ`, `w` and the index set solve the frozen problem.
+    pub(super) fn projected_newton(&mut self, variant: Variant) -> bool {
+        let m = self.ap.n();
+        for v in [&mut self.lam_old, &mut self.w_old, &mut self.lam_hat] {
+            resize(v, m);
+        }
+        // Start from the projection of the current iterate onto the box.
+        for i in 0..m {
+            self.lam[i] = self.lam[i].max(self.lo_eff[i]).min(self.hi_eff[i]);
+        }
+        self.compute_w();
+        let mut f_c = objective(&self.lam, &self.w, &self.bp);
+        loop {
+            if self.stats.pivot_steps >= self.opts.max_steps {
+                return false;
+            }
+            self.set_binding_set();
+            self.lam_old.copy_from_slice(&self.lam);
+            self.w_old.copy_from_slice(&self.w);
+            self.pivot_solve(variant);
+            self.record_step();
+            self.stats.projected_newton_steps += 1;
+            self.find_infeasible();
+            if self.infeasible.is_empty() {
+                return true;
+            }
+            // Projected backtracking along λ_old + α (λ̂ − λ_old) (Armijo on the objective).
+            self.lam_hat.copy_from_slice(&self.lam);
+            let mut alpha = 1.0;
+            loop {
+                for i in 0..m {
+                    let x = self.lam_old[i] + alpha * (self.lam_hat[i] - self.lam_old[i]);
+                    self.lam[i] = x.max(self.lo_eff[i]).min(self.hi_eff[i]);
+                }
+                self.compute_w();
+                let f = objective(&self.lam, &self.w, &self.bp);
+                let mut gd = 0.0;
+                for i in 0..m {
+                    gd += self.w_old[i] * (self.lam[i] - self.lam_old[i]);
+                }
+                if f <= f_c + 1e-4 * gd {
+                    f_c = f;
+                    break;
+                }
+                if alpha < 1e-12 {
+                    // No decrease even along the safe direction: rounding level reached.
+                    self.lam.copy_from_slice(&self.lam_old);
+                    self.w.copy_from_slice(&self.w_old);
+                    return true;
+                }
+                alpha *= 0.5;
+            }
+            if !self.w.iter().all(|x| x.is_finite()) {
+                self.non_finite = true;
+                return false;
+            }
+        }
+    }
+
+    /// ε-binding set at a feasible `λ` with `ε = min(1e-6 (1 + ‖λ‖∞), ‖λ − P(λ − w)‖∞)`:
+    /// variables at a bound whose gradient `w` pushes outwards are held there.
+    pub(super) fn set_binding_set(&mut self) {
+        let m = self.ap.n();
+        let mut pg: f64 = 0.0;
+        let mut scale: f64 = 0.0;
+        for i in 0..m {
+            let p = (self.lam[i] - self.w[i]).max(self.lo_eff[i]).min(self.hi_eff[i]);
+            pg = pg.max((self.lam[i] - p).abs());
+            scale = scale.max(self.lam[i].abs());
+        }
+        let eps = pg.min(1e-6 * (1.0 + scale));
+        for i in 0..m {
+            let (lo, hi, l, g) = (self.lo_eff[i], self.hi_eff[i], self.lam[i], self.w[i]);
+            let s = if lo == hi || (l <= lo + eps && g > 0.0) {
+                IndexState::Lower
+            } else if l >= hi - eps && g < 0.0 {
+                IndexState::Upper
+            } else {
+                IndexState::Free
+            };
+            self.state[i] = s;
+            self.tight[i] = s.is_tight();
+        }
+    }
+
+    /// Semidefinite `A` (redundant contacts): proximal point iterations. Each solves the strongly
+    /// monotone problem `(A + ρI) λ − (b + ρ λ_k) = w_ρ` with the same pivoting (one factor of
+    /// `A + ρI` serves all of them), then moves the centre `λ_k ← λ`. At a fixed point
+    /// `w_ρ = Aλ − b`, so the iterates approach a solution of the original problem, whose residual
+    /// is what is judged (`w = w_ρ − ρ(λ − λ_k)`). `ρ = 1e-5 · max_diag` dominates the rounding-level
+    /// negative eigenvalues of such matrices while keeping `A + ρI` well conditioned.
+    pub(super) fn proximal_solve(&mut self, variant: Variant, friction: bool) -> bool {
+        let m = self.ap.n();
+        self.needs_prox = false;
+        let rho = 1e-5 * self.max_diag;
+        self.prox_shift = rho;
+        self.ap.diagonal_into(&mut self.diag0);
+        for i in 0..m {
+            self.tmp[i] = self.diag0[i] + rho;
+        }
+        self.ap.set_diagonal(&self.tmp);
+        resize(&mut self.bp0, m);
+        self.bp0.copy_from_slice(&self.bp);
+        resize(&mut self.center, m);
+        self.center.copy_from_slice(&self.best);
+        self.lam.copy_from_slice(&self.best);
+        let t = Instant::now();
+        self.l_valid = false;
+        self.prepare(variant);
+        self.stats.factor_us += us(t);
+        let mut best_true = f64::INFINITY;
+        let mut converged = false;
+        while self.stats.pivot_steps < self.opts.max_steps {
+            self.stats.proximal_iterations += 1;
+            for i in 0..m {
+                self.bp[i] = self.bp0[i] + rho * self.center[i];
+            }
+            self.compute_w();
+            let inner = self.bpp_loop(variant, friction, true);
+            // True w of the original problem.
+            for i in 0..m {
+                self.tmp[i] = self.w[i] - rho * (self.lam[i] - self.center[i]);
+            }
+            let (r, rr) = natural_residual(&self.lam, &self.tmp, &self.lop, &self.hip, &self.fip);
+            if rr < best_true {
+                best_true = rr;
+                self.prox_best.clone_from(&self.lam);
+            }
+            if rr <= self.opts.tol_rel || r == 0.0 {
+                converged = true;
+                break;
+            }
+            if !inner || self.non_finite {
+                break;
+            }
+            self.center.copy_from_slice(&self.lam);
+        }
+        // Back to the original problem.
+        self.ap.set_diagonal(&self.diag0);
+        self.bp.copy_from_slice(&self.bp0);
+        self.prox_shift = 0.0;
+        if best_true.is_finite() {
+            self.best.copy_from_slice(&self.prox_best);
+        }
+        if converged {
+            self.best.copy_from_slice(&self.lam);
+        }
+        // The caller reports `best` when not converged; with convergence λ is already the answer.
+        converged || best_true <= self.opts.tol_rel
+    }
+}
+
+/// `½λᵀAλ − bᵀλ = ½λᵀ(w − b)` with `w = Aλ − b`.
+fn objective(lambda: &[f64], w: &[f64], b: &[f64]) -> f64 {
+    0.5 * lambda.iter().zip(w).zip(b).map(|((l, w), b)| l * (w - b)).sum::<f64>()
+}
