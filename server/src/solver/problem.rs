@@ -140,12 +140,20 @@ pub enum MlcpError {
 pub const SYMMETRY_TOL: f64 = 1e-10;
 
 /// Symmetric matrix in compressed sparse rows, both triangles stored, columns sorted in each row.
-#[derive(Debug, Clone, PartialEq, Default)]
+#[derive(Debug, Clone, Default)]
 pub struct SymCsr {
     n: usize,
     row_ptr: Vec<usize>,
     col: Vec<usize>,
     val: Vec<f64>,
+    /// Scratch of [`SymCsr::permuted_from`] (not part of the value).
+    next: Vec<usize>,
+}
+
+impl PartialEq for SymCsr {
+    fn eq(&self, other: &Self) -> bool {
+        self.n == other.n && self.row_ptr == other.row_ptr && self.col == other.col && self.val == other.val
+    }
 }
 
 impl SymCsr {
@@ -178,7 +186,7 @@ impl SymCsr {
             }
             row_ptr.push(col.len());
         }
-        let m = SymCsr { n, row_ptr, col, val };
+        let m = SymCsr { n, row_ptr, col, val, next: Vec::new() };
         m.check_diagonal()?;
         Ok(m)
     }
@@ -240,7 +248,7 @@ impl SymCsr {
         // Entries present only in the upper or lower triangle: their mirror is missing (read as 0).
         // `check_symmetric` above caught every entry whose mirror differs, including a missing one,
         // so the pattern is symmetric here.
-        let m = SymCsr { n, row_ptr, col, val };
+        let m = SymCsr { n, row_ptr, col, val, next: Vec::new() };
         m.check_diagonal()?;
         Ok(m)
     }
@@ -347,34 +355,37 @@ impl SymCsr {
     }
 
     /// Rebuilds `self` as `P A Pᵀ` for the permutation `perm` (`perm[new] = old`, `inv[old] = new`),
-    /// reusing its buffers: no allocation once they have grown to the size of `a`.
+    /// reusing its buffers: no allocation once they have grown to the size of `a`. O(nnz): new columns are visited in increasing order and each entry is appended to its
+    /// new row, so rows come out sorted without a sort (symmetry: column `perm[j]` of `A` is row
+    /// `perm[j]`).
     pub fn permuted_from(&mut self, a: &SymCsr, perm: &[usize], inv: &[usize]) {
+        let mut next = std::mem::take(&mut self.next);
         let n = a.n;
         self.n = n;
         self.row_ptr.clear();
-        self.col.clear();
-        self.val.clear();
         self.row_ptr.push(0);
+        let mut acc = 0;
         for &old in perm.iter().take(n) {
-            let (c, v) = a.row(old);
-            let start = self.col.len();
-            for (&j, &x) in c.iter().zip(v) {
-                self.col.push(inv[j]);
-                self.val.push(x);
-            }
-            // Sort the row by new column index (insertion sort: rows are short, no allocation).
-            let cols = &mut self.col[start..];
-            let vals = &mut self.val[start..];
-            for p in 1..cols.len() {
-                let mut q = p;
-                while q > 0 && cols[q - 1] > cols[q] {
-                    cols.swap(q - 1, q);
-                    vals.swap(q - 1, q);
-                    q -= 1;
-                }
-            }
-            self.row_ptr.push(self.col.len());
+            acc += a.row_ptr[old + 1] - a.row_ptr[old];
+            self.row_ptr.push(acc);
         }
+        self.col.clear();
+        self.col.resize(acc, 0);
+        self.val.clear();
+        self.val.resize(acc, 0.0);
+        next.clear();
+        next.extend_from_slice(&self.row_ptr[..n]);
+        for (j, &old_col) in perm.iter().enumerate().take(n) {
+            let (rows, vals) = a.row(old_col);
+            for (&k, &v) in rows.iter().zip(vals) {
+                let r = inv[k];
+                let slot = next[r];
+                self.col[slot] = j;
+                self.val[slot] = v;
+                next[r] = slot + 1;
+            }
+        }
+        self.next = next;
     }
 }
 

@@ -167,7 +167,7 @@ impl Solver {
 
 const GMRES_RESTART: usize = 30;
 const GMRES_CYCLES: usize = 3;
-const GMRES_TOL: f64 = 1e-12;
+const GMRES_TOL: f64 = 1e-8;
 
 fn dot(a: &[f64], b: &[f64]) -> f64 {
     a.iter().zip(b).map(|(x, y)| x * y).sum()

@@ -50,24 +50,28 @@ impl Solver {
     /// Sets `λ_T` to the frozen bounds, solves eq. 6 with the variant's factor, computes `w`.
     pub(super) fn pivot_solve(&mut self, variant: Variant) -> FactorIn {
         let m = self.ap.n();
-        // λ_T at the bounds; rhs = b − A_{·T} λ_T, zero on T.
-        for i in 0..m {
-            match self.state[i] {
-                IndexState::Free => self.tmp[i] = 0.0,
-                IndexState::Lower => {
-                    self.lam[i] = self.lo_eff[i];
-                    self.tmp[i] = self.lam[i];
-                }
-                IndexState::Upper => {
-                    self.lam[i] = self.hi_eff[i];
-                    self.tmp[i] = self.lam[i];
+        // λ_T at the bounds; rhs = b − A_{·T} λ_T (only the rows of tight columns), zero on T.
+        let t = Instant::now();
+        self.rhs.copy_from_slice(&self.bp);
+        for j in 0..m {
+            let lj = match self.state[j] {
+                IndexState::Free => continue,
+                IndexState::Lower => self.lo_eff[j],
+                IndexState::Upper => self.hi_eff[j],
+            };
+            self.lam[j] = lj;
+            if lj != 0.0 {
+                // Column j of the symmetric A is its row j.
+                let (cols, vals) = self.ap.row(j);
+                for (&i, &a) in cols.iter().zip(vals) {
+                    self.rhs[i] -= a * lj;
                 }
             }
         }
-        let t = Instant::now();
-        self.ap.mul_vec(&self.tmp, &mut self.rhs);
         for i in 0..m {
-            self.rhs[i] = if self.tight[i] { 0.0 } else { self.bp[i] - self.rhs[i] };
+            if self.tight[i] {
+                self.rhs[i] = 0.0;
+            }
         }
         self.stats.solve_us += us(t);
 
