@@ -26,6 +26,6 @@ mod stats;
 mod variant;
 
 pub use bpp::{Fallback, Solver, SolverOptions};
-pub use problem::{IndexState, Mlcp, MlcpError, SymCsr, effective_bounds, natural_residual};
+pub use problem::{IndexState, Mlcp, MlcpError, SYMMETRY_TOL, SymCsr, effective_bounds, natural_residual};
 pub use stats::{SolveStats, SolveStatus};
 pub use variant::{OrderingKind, UnknownVariant, Variant};
