@@ -2,4 +2,5 @@
 //! loader and the transports. The binary `pivotsim-server` is a thin CLI over this library.
 
 pub mod bench;
+pub mod plot;
 pub mod solver;
