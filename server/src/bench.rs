@@ -72,6 +72,8 @@ struct Plan {
     kernel_repeats: usize,
     kernel_m: usize,
     kernel_t_max: usize,
+    /// Random tight sets averaged per tight count in the envelope sweep.
+    kernel_sets: usize,
     dense_repeats: usize,
     dense_fracs: Vec<f64>,
     fig4_m: Vec<usize>,
@@ -100,6 +102,7 @@ impl Plan {
                 kernel_repeats: 3,
                 kernel_m: 60,
                 kernel_t_max: 8,
+                kernel_sets: 1,
                 dense_repeats: 1,
                 dense_fracs: vec![5.0, 20.0],
                 fig4_m: vec![20, 40],
@@ -122,6 +125,7 @@ impl Plan {
                 kernel_repeats: 5,
                 kernel_m: 430,
                 kernel_t_max: 40,
+                kernel_sets: 3,
                 dense_repeats: 3,
                 dense_fracs: vec![1.0, 2.0, 3.0, 5.0, 7.0, 10.0, 15.0, 20.0, 30.0],
                 fig4_m: vec![50, 100, 200],
@@ -142,6 +146,7 @@ impl Plan {
                 kernel_repeats: 9,
                 kernel_m: 430,
                 kernel_t_max: 64,
+                kernel_sets: 5,
                 dense_repeats: 5,
                 dense_fracs: vec![
                     1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 8.0, 10.0, 12.0, 15.0, 20.0, 25.0, 30.0, 40.0,
@@ -517,28 +522,40 @@ fn envelope_kernel(name: &str, a: &SymCsr, plan: &Plan, seed: u64) -> EnvelopeKe
     let deletion_us_min = dels.iter().copied().fold(f64::INFINITY, f64::min);
     let deletion_us_max = dels.iter().copied().fold(0.0, f64::max);
 
+    // Deletion cost depends on the position (the sweep runs to the end of the connected block), so
+    // every tight count is averaged over several random nested tight sets.
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
-    let mut order: Vec<usize> = (0..m).collect();
-    order.shuffle(&mut rng);
+    let orders: Vec<Vec<usize>> = (0..plan.kernel_sets.max(1))
+        .map(|_| {
+            let mut o: Vec<usize> = (0..m).collect();
+            o.shuffle(&mut rng);
+            o
+        })
+        .collect();
     let mut sweep = Vec::new();
     for t in 1..=plan.kernel_t_max.min(m.saturating_sub(1)) {
-        let mut set = order[..t].to_vec();
-        set.sort_unstable();
-        mask.fill(false);
-        for &i in &set {
-            mask[i] = true;
-        }
-        let downdate_us = time_us(tu, reps, || {
-            l.copy_from_slice(&l0);
+        let (mut downdate_us, mut refactor_us) = (0.0, 0.0);
+        for order in &orders {
+            let mut set = order[..t].to_vec();
+            set.sort_unstable();
+            mask.fill(false);
             for &i in &set {
-                env.delete(&mut l, i, &mut sigma);
+                mask[i] = true;
             }
-            black_box(&mut l);
-        });
-        let refactor_us = time_us(tu, reps, || {
-            env.factor_from(&ap, &mask, &mut l, 0, maxd);
-            black_box(&mut l);
-        });
+            downdate_us += time_us(tu, reps, || {
+                l.copy_from_slice(&l0);
+                for &i in &set {
+                    env.delete(&mut l, i, &mut sigma);
+                }
+                black_box(&mut l);
+            });
+            refactor_us += time_us(tu, reps, || {
+                env.factor_from(&ap, &mask, &mut l, 0, maxd);
+                black_box(&mut l);
+            });
+        }
+        downdate_us /= orders.len() as f64;
+        refactor_us /= orders.len() as f64;
         sweep.push(SweepPoint {
             tight: t,
             tight_pct: 100.0 * t as f64 / m as f64,
@@ -974,7 +991,7 @@ pub struct Summary {
     pub worst_deletion_error_abs: Option<(f64, String)>,
     /// Worst relative and absolute deletion errors over the runs without regularized pivots
     /// (positive definite `A`, the setting of paper Table 4).
-    pub worst_deletion_error_spd: Option<(f64, f64)>,
+    pub worst_deletion_error_spd: Option<(f64, f64, String)>,
     /// Envelope kernel crossover (tight count) on the generated contact-like matrix.
     pub envelope_crossover_tight: Option<f64>,
     /// Dense kernel crossover (% tight) on the random dense SPD matrix of the kernel size.
@@ -1014,14 +1031,15 @@ fn summarize(plan: &Plan, problems: &[ProblemResult], env: &[EnvelopeKernel], dk
     let c1000 = autos.iter().filter(|r| r.long.as_ref().is_some_and(RunRecord::converged)).count();
     let mut worst_rel: Option<(f64, String)> = None;
     let mut worst_abs: Option<(f64, String)> = None;
-    let mut worst_spd: Option<(f64, f64)> = None;
+    let mut worst_spd: Option<(f64, f64, String)> = None;
     for p in problems {
         for r in &p.variants {
             if let (Some(e), Some(a), 0) =
                 (r.deletion_error, r.deletion_error_abs, r.deletion_run_regularized)
             {
-                let w = worst_spd.unwrap_or((0.0, 0.0));
-                worst_spd = Some((w.0.max(e), w.1.max(a)));
+                let (we, wa, wat) = worst_spd.take().unwrap_or((0.0, 0.0, String::new()));
+                let wat = if e > we { format!("{} [{}]", p.name, r.variant) } else { wat };
+                worst_spd = Some((we.max(e), wa.max(a), wat));
             }
             let at = format!("{} [{}]", p.name, r.variant);
             if let Some(e) = r.deletion_error.filter(|e| worst_rel.as_ref().is_none_or(|w| *e > w.0)) {
@@ -1097,10 +1115,10 @@ fn summary_text(s: &Summary) -> String {
             let _ = writeln!(t, "  worst deletion error: — (not measured)");
         }
     }
-    if let Some((r, a)) = s.worst_deletion_error_spd {
+    if let Some((r, a, at)) = &s.worst_deletion_error_spd {
         let _ = writeln!(
             t,
-            "  worst deletion error without regularized pivots: relative {r:.2e}, absolute {a:.2e}"
+            "  worst deletion error without regularized pivots: relative {r:.2e} ({at}), absolute {a:.2e}"
         );
     }
     let _ = writeln!(
@@ -1162,9 +1180,10 @@ fn markdown(r: &Report<'_>) -> String {
     let _ = writeln!(
         w,
         "Envelope (RCM order): one factorization of `A`, one copy of `L₀`, single deletions at 8 indices \
-         spread over the matrix (copy subtracted); crossover = tight count from which copy + deletions \
-         from `L₀` no longer beat an envelope refactor of the masked matrix (measured sweep over random \
-         nested tight sets; model = (factor − copy) / deletion).\n"
+         spread over the matrix (copy subtracted; a deletion sweeps to the end of its connected block, so \
+         its cost falls with the index); crossover = tight count from which copy + deletions from `L₀` no \
+         longer beat an envelope refactor of the masked matrix (sweep averaged over random nested tight \
+         sets; model = (factor − copy) / mean deletion).\n"
     );
     let _ = writeln!(
         w,
@@ -1451,8 +1470,14 @@ fn plot_solve_times(path: &Path, problems: &[&ProblemResult]) -> anyhow::Result<
         .map_err(plot_err)?;
     for (i, p) in problems.iter().enumerate() {
         let (px, py) = chart.backend_coord(&(i as f64 + 0.5, ymin));
-        let label = format!("{} (m={})", p.name, p.m);
-        root.draw(&Text::new(label, (px - 60, py + 12), ("sans-serif", 13).into_font())).map_err(plot_err)?;
+        let style = ("sans-serif", 13).into_font().into_text_style(&root).pos(
+            plotters::style::text_anchor::Pos::new(
+                plotters::style::text_anchor::HPos::Center,
+                plotters::style::text_anchor::VPos::Top,
+            ),
+        );
+        root.draw(&Text::new(p.name.clone(), (px, py + 8), style.clone())).map_err(plot_err)?;
+        root.draw(&Text::new(format!("m = {}", p.m), (px, py + 24), style)).map_err(plot_err)?;
     }
     root.present().map_err(plot_err)?;
     Ok(())

@@ -313,11 +313,21 @@ impl SymCsr {
         debug_assert!(x.len() == self.n && y.len() == self.n);
         for i in 0..self.n {
             let (c, v) = self.row(i);
-            let mut s = 0.0;
-            for (&j, &a) in c.iter().zip(v) {
-                s += a * x[j];
+            // Four independent accumulators: the serial sum would be latency-bound.
+            let mut acc = [0.0f64; 4];
+            let mut cc = c.chunks_exact(4);
+            let mut vc = v.chunks_exact(4);
+            for (cj, vj) in (&mut cc).zip(&mut vc) {
+                acc[0] += vj[0] * x[cj[0]];
+                acc[1] += vj[1] * x[cj[1]];
+                acc[2] += vj[2] * x[cj[2]];
+                acc[3] += vj[3] * x[cj[3]];
             }
-            y[i] = s;
+            let mut tail = 0.0;
+            for (&j, &a) in cc.remainder().iter().zip(vc.remainder()) {
+                tail += a * x[j];
+            }
+            y[i] = (acc[0] + acc[1]) + (acc[2] + acc[3]) + tail;
         }
     }
 
