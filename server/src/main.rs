@@ -129,6 +129,7 @@ fn solve(
             "projected_newton_steps": st.projected_newton_steps,
             "friction_updates": st.friction_updates,
             "coupled_steps": st.coupled_steps,
+            "outer_damped": st.outer_damped,
             "krylov_iterations": st.krylov_iterations,
             "residual": st.residual,
             "residual_rel": st.residual_rel,

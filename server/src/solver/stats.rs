@@ -77,6 +77,8 @@ pub struct SolveStats {
     pub friction_updates: usize,
     /// Outer updates that took the exact coupled Newton point (GMRES preconditioned by the factor).
     pub coupled_steps: usize,
+    /// Outer updates where the coupled Newton point was damped or rejected by the residual test.
+    pub outer_damped: usize,
     /// GMRES iterations of those steps.
     pub krylov_iterations: usize,
     /// Pivots of the factorization that were non-positive or tiny and were regularized.

@@ -13,8 +13,9 @@ impl Solver {
     /// system `(A_FF + A_FT E) λ_F = b_F − A_FT c_T` is not symmetric. Solved by GMRES, right
     /// preconditioned with the factor of `A_FF` already at hand (the preconditioned operator is the
     /// identity plus a term of rank ≤ #coupled rows, so few iterations), starting from the frozen
-    /// point in `λ`. Leaves the corrected `λ` and `w`. Returns false when nothing is coupled.
-    pub(super) fn coupled_newton(&mut self, which: FactorIn) -> bool {
+    /// point in `λ`. Leaves the corrected `λ` and `w`. Returns `None` when nothing is coupled and
+    /// `Some(false)` when GMRES did not reach `GMRES_ACCEPT` (the caller then keeps the frozen point).
+    pub(super) fn coupled_newton(&mut self, which: FactorIn) -> Option<bool> {
         let m = self.ap.n();
         let mut coupled = 0;
         for i in 0..m {
@@ -26,7 +27,7 @@ impl Solver {
             }
         }
         if coupled == 0 {
-            return false;
+            return None;
         }
         let t0 = Instant::now();
         let restart = GMRES_RESTART.min(m);
@@ -122,8 +123,15 @@ impl Solver {
             self.apply_coupling();
             self.compute_w();
         }
+        // Accept only a converged Newton point: GMRES may stagnate when the coupling is strong.
+        let mut beta = 0.0;
+        for i in 0..m {
+            if !self.tight[i] {
+                beta += self.w[i] * self.w[i];
+            }
+        }
         self.stats.solve_us += us(t0);
-        true
+        Some(beta.sqrt() <= GMRES_ACCEPT * beta0.max(f64::MIN_POSITIVE))
     }
 
     /// Tight friction rows against a free, positive normal impulse take `μ^± λ_j`.
@@ -165,9 +173,11 @@ impl Solver {
     }
 }
 
-const GMRES_RESTART: usize = 30;
+const GMRES_RESTART: usize = 60;
 const GMRES_CYCLES: usize = 3;
 const GMRES_TOL: f64 = 1e-8;
+/// Largest relative free-row residual of an accepted coupled Newton point.
+const GMRES_ACCEPT: f64 = 1e-6;
 
 fn dot(a: &[f64], b: &[f64]) -> f64 {
     a.iter().zip(b).map(|(x, y)| x * y).sum()
