@@ -193,3 +193,30 @@ fn murty_fallback_reaches_the_same_solution() {
         }
     }
 }
+
+#[test]
+fn a_new_problem_with_the_same_pattern_reuses_the_ordering_and_solves_correctly() {
+    let p1 = banded_problem(250, 9, 41, 0.4);
+    // Same pattern, other values: scale the matrix and change b.
+    let n = p1.n();
+    let mut trip = Vec::new();
+    for i in 0..n {
+        let (cols, vals) = p1.a().row(i);
+        for (&j, &v) in cols.iter().zip(vals) {
+            trip.push((i, j, if i == j { 2.0 * v + 0.1 } else { 2.0 * v }));
+        }
+    }
+    let a2 = pivotsim_server::solver::SymCsr::from_triplets(n, &trip).unwrap();
+    let b2: Vec<f64> = p1.b().iter().map(|x| -0.5 * x + 0.1).collect();
+    let p2 = Mlcp::new(a2, b2, p1.lo().to_vec(), p1.hi().to_vec(), p1.findex().to_vec()).unwrap();
+    for v in [Variant::Skyline, Variant::Auto, Variant::Incremental] {
+        let mut s = Solver::new(SolverOptions { variant: v, max_steps: 1000, ..Default::default() });
+        let mut lam = vec![0.0; n];
+        assert!(!s.solve(&p1, &mut lam).pattern_reused);
+        let st = s.solve(&p2, &mut lam).clone();
+        assert!(st.pattern_reused, "{v}");
+        let (fresh, _) = solve(&p2, v, 1000);
+        assert_eq!(st.status, SolveStatus::Converged);
+        assert!(max_diff(&lam, &fresh) < 1e-12, "{v}");
+    }
+}

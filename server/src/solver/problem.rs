@@ -148,6 +148,8 @@ pub struct SymCsr {
     val: Vec<f64>,
     /// Scratch of [`SymCsr::permuted_from`] (not part of the value).
     next: Vec<usize>,
+    /// After [`SymCsr::permuted_from`]: the source position of every entry (not part of the value).
+    src: Vec<usize>,
 }
 
 impl PartialEq for SymCsr {
@@ -186,7 +188,7 @@ impl SymCsr {
             }
             row_ptr.push(col.len());
         }
-        let m = SymCsr { n, row_ptr, col, val, next: Vec::new() };
+        let m = SymCsr { n, row_ptr, col, val, next: Vec::new(), src: Vec::new() };
         m.check_diagonal()?;
         Ok(m)
     }
@@ -248,7 +250,7 @@ impl SymCsr {
         // Entries present only in the upper or lower triangle: their mirror is missing (read as 0).
         // `check_symmetric` above caught every entry whose mirror differs, including a missing one,
         // so the pattern is symmetric here.
-        let m = SymCsr { n, row_ptr, col, val, next: Vec::new() };
+        let m = SymCsr { n, row_ptr, col, val, next: Vec::new(), src: Vec::new() };
         m.check_diagonal()?;
         Ok(m)
     }
@@ -383,19 +385,47 @@ impl SymCsr {
         self.col.resize(acc, 0);
         self.val.clear();
         self.val.resize(acc, 0.0);
+        self.src.clear();
+        self.src.resize(acc, 0);
         next.clear();
         next.extend_from_slice(&self.row_ptr[..n]);
         for (j, &old_col) in perm.iter().enumerate().take(n) {
+            let base = a.row_ptr[old_col];
             let (rows, vals) = a.row(old_col);
-            for (&k, &v) in rows.iter().zip(vals) {
+            for (q, (&k, &v)) in rows.iter().zip(vals).enumerate() {
                 let r = inv[k];
                 let slot = next[r];
                 self.col[slot] = j;
+                // New entry (inv[k], j) is A[k][old_col] = A[old_col][k] (symmetric), stored at
+                // position `base + q` of row `old_col`.
                 self.val[slot] = v;
+                self.src[slot] = base + q;
                 next[r] = slot + 1;
             }
         }
         self.next = next;
+    }
+
+    /// After `permuted_from(a, …)` with a matrix of the same pattern as `a`: refreshes only the
+    /// values (a gather through the stored source positions; O(nnz), no index work).
+    pub fn refresh_permuted_values(&mut self, a: &SymCsr) {
+        debug_assert_eq!(self.src.len(), a.val.len());
+        for (v, &k) in self.val.iter_mut().zip(&self.src) {
+            *v = a.val[k];
+        }
+    }
+
+    /// Whether `self` and `other` have the same sparsity pattern.
+    pub fn same_pattern(&self, other: &SymCsr) -> bool {
+        self.n == other.n && self.row_ptr == other.row_ptr && self.col == other.col
+    }
+
+    /// Copies the pattern (not the values) of `other` into `self`, reusing buffers.
+    pub fn copy_pattern_from(&mut self, other: &SymCsr) {
+        self.n = other.n;
+        self.row_ptr.clone_from(&other.row_ptr);
+        self.col.clone_from(&other.col);
+        self.val.clear();
     }
 }
 
@@ -741,5 +771,12 @@ mod tests {
                 assert_eq!(p.get(i, j), a.get(perm[i], perm[j]));
             }
         }
+        // Same pattern, new values: refreshing the values equals a fresh permutation.
+        let b = SymCsr::from_dense_row_major(3, &[5.0, 2.0, 0.0, 2.0, 6.0, -1.0, 0.0, -1.0, 7.0]).unwrap();
+        assert!(b.same_pattern(&a));
+        p.refresh_permuted_values(&b);
+        let mut fresh = SymCsr::default();
+        fresh.permuted_from(&b, &perm, &inv);
+        assert_eq!(p, fresh);
     }
 }

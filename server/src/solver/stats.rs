@@ -55,6 +55,8 @@ pub struct SolveStats {
     pub envelope_before: usize,
     /// Same after reordering.
     pub envelope_after: usize,
+    /// The ordering and envelope of the previous solve were reused (same sparsity pattern).
+    pub pattern_reused: bool,
     /// Stored entries of the factor (envelope storage incl. diagonal, or `m(m+1)/2` dense).
     pub factor_entries: usize,
     /// Pivot steps (linear solves with a new index set) taken.

@@ -23,7 +23,9 @@ impl Solver {
                 self.stats.factor_entries = m * (m + 1) / 2;
             }
             Variant::Skyline | Variant::SkylineRefactor | Variant::Incremental | Variant::Auto => {
-                self.env.build(&self.ap);
+                if !self.pattern_reused {
+                    self.env.build(&self.ap);
+                }
                 let len = self.env.len();
                 self.stats.factor_entries = len;
                 resize(&mut self.l, len);

@@ -169,6 +169,10 @@ pub struct Solver {
     out_state: Vec<IndexState>,
     max_diag: f64,
     non_finite: bool,
+    pattern: SymCsr,
+    pattern_ordering: Option<OrderingKind>,
+    pattern_reused: bool,
+    metrics: [usize; 4],
     outer_hist: [f64; OUTER_MEMORY],
     needs_prox: bool,
     prox_shift: f64,
@@ -224,14 +228,34 @@ impl Solver {
             return &self.stats;
         }
 
-        // Ordering and permuted copy of the problem.
+        // Ordering and permuted copy of the problem. An island whose sparsity pattern did not
+        // change since the last solve (the common case from one time step to the next) keeps its
+        // ordering, its envelope and their metrics.
         let t = Instant::now();
-        self.ord_ws.order(p.a(), ordering, &mut self.perm, &mut self.inv);
-        self.ap.permuted_from(p.a(), &self.perm, &self.inv);
-        self.stats.bandwidth_before = ordering::bandwidth(p.a());
-        self.stats.envelope_before = ordering::envelope(p.a());
-        self.stats.bandwidth_after = ordering::bandwidth(&self.ap);
-        self.stats.envelope_after = ordering::envelope(&self.ap);
+        self.pattern_reused = self.pattern_ordering == Some(ordering)
+            && self.perm.len() == m
+            && self.pattern.same_pattern(p.a());
+        if self.pattern_reused {
+            self.ap.refresh_permuted_values(p.a());
+        } else {
+            self.ord_ws.order(p.a(), ordering, &mut self.perm, &mut self.inv);
+            self.ap.permuted_from(p.a(), &self.perm, &self.inv);
+            self.pattern.copy_pattern_from(p.a());
+            self.pattern_ordering = Some(ordering);
+            self.metrics = [
+                ordering::bandwidth(p.a()),
+                ordering::envelope(p.a()),
+                ordering::bandwidth_permuted(p.a(), &self.inv),
+                ordering::envelope_permuted(p.a(), &self.inv),
+            ];
+        }
+        [
+            self.stats.bandwidth_before,
+            self.stats.envelope_before,
+            self.stats.bandwidth_after,
+            self.stats.envelope_after,
+        ] = self.metrics;
+        self.stats.pattern_reused = self.pattern_reused;
         resize(&mut self.bp, m);
         resize(&mut self.lop, m);
         resize(&mut self.hip, m);
