@@ -286,7 +286,7 @@ impl Solver {
     /// Solves in place on `rhs` with the factor held in `which`.
     pub(super) fn solve_with(&mut self, which: FactorIn) {
         let m = self.ap.n();
-        match (self.opts.variant, which) {
+        match (self.kernel, which) {
             (_, FactorIn::Compact) => {
                 let k = self.free_idx.len();
                 for (q, &i) in self.free_idx.iter().enumerate() {
@@ -338,7 +338,7 @@ impl Solver {
         for i in 0..m {
             self.rhs[i] = if self.tight[i] { 0.0 } else { -self.w[i] };
         }
-        let which = match self.opts.variant {
+        let which = match self.kernel {
             Variant::Full => FactorIn::Compact,
             Variant::Downdate | Variant::Skyline | Variant::Auto if !self.tight.iter().any(|&t| t) => {
                 FactorIn::L0
