@@ -125,6 +125,7 @@ fn solve(
             "tight_per_step": st.tight_per_step,
             "fallback": st.fallback,
             "murty_steps": st.murty_steps,
+            "newton_steps": st.newton_steps,
             "proximal_iterations": st.proximal_iterations,
             "projected_newton_steps": st.projected_newton_steps,
             "friction_updates": st.friction_updates,

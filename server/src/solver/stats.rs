@@ -71,6 +71,8 @@ pub struct SolveStats {
     pub fallback: bool,
     /// Murty single-pivot steps taken.
     pub murty_steps: usize,
+    /// Steps of the semismooth Newton fallback (stalled outer friction iteration).
+    pub newton_steps: usize,
     /// Proximal point iterations (semidefinite `A`).
     pub proximal_iterations: usize,
     /// Projected-Newton safeguard steps taken.

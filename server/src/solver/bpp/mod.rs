@@ -70,6 +70,9 @@ pub struct SolverOptions {
     pub pgs: PgsOptions,
     /// Safeguard when block pivoting stalls.
     pub fallback: Fallback,
+    /// When the outer friction iteration stalls, finish with a semismooth Newton method on the
+    /// natural map (exact coupled Newton points, backtracking line search).
+    pub newton_fallback: bool,
     /// Switch to proximal point iterations when the factorization had to regularize pivots
     /// (semidefinite `A`).
     pub proximal: bool,
@@ -95,6 +98,7 @@ impl Default for SolverOptions {
             fallback: Fallback::ProjectedNewton,
             coupled_update: true,
             proximal: true,
+            newton_fallback: true,
             auto_weights: (2.15, 0.11, 1.0),
         }
     }
@@ -170,6 +174,7 @@ pub struct Solver {
     out_state: Vec<IndexState>,
     max_diag: f64,
     non_finite: bool,
+    best_res: f64,
     kernel: Variant,
     pattern: SymCsr,
     pattern_ordering: Option<OrderingKind>,
@@ -366,10 +371,12 @@ impl Solver {
         self.update_bounds();
         // Without a warm-start λ the friction bounds are frozen at the first (all-free) solve.
         let mut bounds_set = bounds_known;
-        let mut best_res = f64::INFINITY;
+        self.best_res = f64::INFINITY;
         let mut best_ninf = usize::MAX;
         let mut no_progress = 0;
         let mut solved_by_fallback = false;
+        let mut outer_best = f64::INFINITY;
+        let mut outer_stall = 0;
         loop {
             if !solved_by_fallback {
                 if self.stats.pivot_steps >= self.opts.max_steps {
@@ -393,8 +400,8 @@ impl Solver {
                 self.non_finite = true;
                 return false;
             }
-            if res_rel < best_res {
-                best_res = res_rel;
+            if res_rel < self.best_res {
+                self.best_res = res_rel;
                 self.best.copy_from_slice(&self.lam);
             }
             self.find_infeasible();
@@ -409,8 +416,8 @@ impl Solver {
                     }
                     let (_, rr) =
                         super::natural_residual(&self.lam, &self.w, &self.lop, &self.hip, &self.fip);
-                    if rr.is_finite() && rr < best_res {
-                        best_res = rr;
+                    if rr.is_finite() && rr < self.best_res {
+                        self.best_res = rr;
                         self.best.copy_from_slice(&self.lam);
                     }
                 }
@@ -419,6 +426,34 @@ impl Solver {
                     self.stats.friction_updates += 1;
                     best_ninf = usize::MAX;
                     no_progress = 0;
+                    // A stalled outer iteration (cycling between index sets) hands over to the
+                    // semismooth Newton method on the whole natural map, from the best iterate.
+                    if self.best_res < 0.9 * outer_best {
+                        outer_best = self.best_res;
+                        outer_stall = 0;
+                    } else {
+                        outer_stall += 1;
+                    }
+                    if outer_stall >= OUTER_STALL && self.opts.newton_fallback {
+                        self.lam.copy_from_slice(&self.best);
+                        self.compute_w();
+                        if self.semismooth_newton(variant, NEWTON_BUDGET) {
+                            return true;
+                        }
+                        // Not there within its budget: resume the outer iteration from the best
+                        // iterate seen (Newton's or the outer loop's).
+                        if self.non_finite {
+                            return false;
+                        }
+                        self.lam.copy_from_slice(&self.best);
+                        self.compute_w();
+                        let (_, rr) =
+                            super::natural_residual(&self.lam, &self.w, &self.lop, &self.hip, &self.fip);
+                        self.best_res = self.best_res.min(rr);
+                        outer_best = self.best_res;
+                        outer_stall = 0;
+                        self.update_bounds();
+                    }
                     continue;
                 }
                 // Bounds consistent: what is left is rounding. Iterative refinement.
@@ -614,6 +649,12 @@ impl Solver {
         self.stats.tight = tight;
     }
 }
+
+/// Outer updates without a 10 % improvement of the best residual before the Newton fallback.
+const OUTER_STALL: usize = 12;
+
+/// Pivot steps one semismooth-Newton fallback may take before the outer iteration resumes.
+const NEWTON_BUDGET: usize = 60;
 
 /// Largest island that `auto` solves with the dense kernel.
 const AUTO_DENSE_MAX: usize = 24;

@@ -3,7 +3,7 @@
 
 use std::time::Instant;
 
-use super::super::{IndexState, Variant, natural_residual};
+use super::super::{IndexState, Variant, effective_bounds, natural_residual};
 use super::{Solver, resize, us};
 
 impl Solver {
@@ -71,6 +71,106 @@ impl Solver {
                 self.non_finite = true;
                 return false;
             }
+        }
+    }
+
+    /// Semismooth Newton on the natural map `r(λ) = λ − mid(lo(λ), hi(λ), λ − w)` with the true,
+    /// moving friction bounds: the index set is read off `r` at `λ`, the Newton point is the pivot
+    /// step for it with the bounds frozen, corrected to the exact coupled point (tight friction
+    /// rows follow their free normal impulse, `coupled.rs`), and a backtracking search on `‖r‖²`
+    /// along the segment (where `w` is affine) takes the first Armijo point, or the best point
+    /// tried when none is. The last resort of friction-coupled solves whose outer iteration stalls.
+    pub(super) fn semismooth_newton(&mut self, variant: Variant, budget: usize) -> bool {
+        let cap = self.opts.max_steps.min(self.stats.pivot_steps + budget);
+        let m = self.ap.n();
+        for v in [&mut self.lam_old, &mut self.w_old, &mut self.lam_hat] {
+            resize(v, m);
+        }
+        self.stats.fallback = true;
+        let mut theta = natural_residual_sq(&self.lam, &self.w, &self.lop, &self.hip, &self.fip);
+        let mut best = f64::INFINITY;
+        while self.stats.pivot_steps < cap {
+            let (r, rr) = natural_residual(&self.lam, &self.w, &self.lop, &self.hip, &self.fip);
+            if rr < best {
+                best = rr;
+                if rr < self.best_res {
+                    self.best_res = rr;
+                    self.best.copy_from_slice(&self.lam);
+                }
+            }
+            if rr <= self.opts.tol_rel || r == 0.0 {
+                return true;
+            }
+            if !rr.is_finite() {
+                self.non_finite = true;
+                return false;
+            }
+            self.classify_natural();
+            self.update_bounds();
+            self.lam_old.copy_from_slice(&self.lam);
+            self.w_old.copy_from_slice(&self.w);
+            let which = self.pivot_solve(variant);
+            self.record_step();
+            self.stats.newton_steps += 1;
+            if let Some(false) = self.coupled_newton(which) {
+                // GMRES did not converge: recompute the frozen point.
+                self.pivot_solve(variant);
+                self.record_step();
+            }
+            let theta_n = natural_residual_sq(&self.lam, &self.w, &self.lop, &self.hip, &self.fip);
+            if theta_n <= (1.0 - 2e-4) * theta {
+                theta = theta_n;
+                continue;
+            }
+            // Backtracking between λ_old and the Newton point (kept in lam_hat / tmp).
+            self.lam_hat.copy_from_slice(&self.lam);
+            self.tmp.copy_from_slice(&self.w);
+            let (mut best_t, mut best_theta) = (1.0, theta_n);
+            let mut t = 0.5;
+            while t >= 1e-4 {
+                for i in 0..m {
+                    self.lam[i] = self.lam_old[i] + t * (self.lam_hat[i] - self.lam_old[i]);
+                    self.w[i] = self.w_old[i] + t * (self.tmp[i] - self.w_old[i]);
+                }
+                let th = natural_residual_sq(&self.lam, &self.w, &self.lop, &self.hip, &self.fip);
+                if th < best_theta {
+                    (best_t, best_theta) = (t, th);
+                }
+                if th <= (1.0 - 2e-4 * t) * theta {
+                    break;
+                }
+                t *= 0.5;
+            }
+            for i in 0..m {
+                self.lam[i] = self.lam_old[i] + best_t * (self.lam_hat[i] - self.lam_old[i]);
+                self.w[i] = self.w_old[i] + best_t * (self.tmp[i] - self.w_old[i]);
+            }
+            theta = best_theta;
+        }
+        // The final iterate may be the best one.
+        let (_, rr) = natural_residual(&self.lam, &self.w, &self.lop, &self.hip, &self.fip);
+        if rr < self.best_res {
+            self.best_res = rr;
+            self.best.copy_from_slice(&self.lam);
+        }
+        false
+    }
+
+    /// Index set read off the natural map at `(λ, w)` with the bounds at `λ`: `T_lo` where
+    /// `λ − w ≤ lo(λ)`, `T_hi` where `λ − w ≥ hi(λ)`, free otherwise.
+    fn classify_natural(&mut self) {
+        for i in 0..self.ap.n() {
+            let (lo, hi) = effective_bounds(self.lop[i], self.hip[i], self.fip[i], &self.lam);
+            let z = self.lam[i] - self.w[i];
+            let s = if z <= lo && lo > f64::NEG_INFINITY {
+                IndexState::Lower
+            } else if z >= hi && hi < f64::INFINITY {
+                IndexState::Upper
+            } else {
+                IndexState::Free
+            };
+            self.state[i] = s;
+            self.tight[i] = s.is_tight();
         }
     }
 
@@ -170,4 +270,15 @@ impl Solver {
 /// `½λᵀAλ − bᵀλ = ½λᵀ(w − b)` with `w = Aλ − b`.
 fn objective(lambda: &[f64], w: &[f64], b: &[f64]) -> f64 {
     0.5 * lambda.iter().zip(w).zip(b).map(|((l, w), b)| l * (w - b)).sum::<f64>()
+}
+
+/// `‖r(λ)‖₂²` of the natural map with bounds at `λ` (the merit of the Newton fallback).
+fn natural_residual_sq(lambda: &[f64], w: &[f64], lo: &[f64], hi: &[f64], findex: &[Option<usize>]) -> f64 {
+    let mut acc = 0.0;
+    for i in 0..lambda.len() {
+        let (l, h) = effective_bounds(lo[i], hi[i], findex[i], lambda);
+        let r = lambda[i] - (lambda[i] - w[i]).max(l).min(h);
+        acc += r * r;
+    }
+    if acc.is_nan() { f64::INFINITY } else { acc }
 }
