@@ -220,3 +220,29 @@ fn a_new_problem_with_the_same_pattern_reuses_the_ordering_and_solves_correctly(
         assert!(max_diff(&lam, &fresh) < 1e-12, "{v}");
     }
 }
+
+#[test]
+fn generated_contact_islands_converge_with_every_exact_variant() {
+    // Chains of bodies with ball joints and frictional ground contacts (the bench's generator),
+    // including the ones whose outer friction iteration cycles between two index sets.
+    use pivotsim_server::bench::contact_like;
+    for (m, seed, ratio) in [(200, 3, 6_300.0), (430, 5, 6_300.0), (430, 7, 20_000.0), (430, 8, 6_300.0)] {
+        let p = contact_like(m, seed, ratio);
+        assert!(p.has_friction());
+        for v in Variant::EXACT {
+            let (lam, st) = solve(&p, v, 1000);
+            println!(
+                "m={} seed={seed} {v}: {} steps {} newton {} residual {:.1e}",
+                p.n(),
+                st.status.name(),
+                st.pivot_steps,
+                st.newton_steps,
+                st.residual_rel
+            );
+            assert_eq!(st.status, SolveStatus::Converged, "m={m} seed={seed} {v}");
+            let mut w = vec![0.0; p.n()];
+            let (_, rel) = p.natural_residual(&lam, &mut w);
+            assert!(rel <= 1e-9, "m={m} seed={seed} {v}: {rel:e}");
+        }
+    }
+}
