@@ -1,7 +1,8 @@
 //! `pivotsim-server`: the CLI over the pivotsim library.
 //!
-//! Subcommands today: `solve` (one MLCP file) and `bench-solver` (every variant on generated and
-//! shared problems). `serve`, `run` and `scenes` arrive with the server, scene and dynamics issues.
+//! Subcommands today: `solve` (one MLCP file), `pattern` (sparsity plots) and `bench-solver` (every
+//! variant on generated and shared problems). `serve`, `run` and `scenes` arrive with the server,
+//! scene and dynamics issues.
 
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -20,6 +21,18 @@ struct Cli {
 
 #[derive(Debug, Subcommand)]
 enum Command {
+    /// Plot the sparsity pattern of an MLCP file's matrix before and after reordering, and its
+    /// envelope factor (paper Fig. 5 and 6), as one SVG.
+    Pattern {
+        /// The problem file.
+        file: PathBuf,
+        /// Output SVG.
+        #[arg(long, default_value = "pattern.svg")]
+        out: PathBuf,
+        /// Reordering: natural, cm, rcm.
+        #[arg(long, default_value = "rcm")]
+        ordering: OrderingKind,
+    },
     /// Solve one MLCP file (format: shared/MLCP_FORMAT.md) and print its statistics.
     Solve {
         /// The problem file.
@@ -67,6 +80,7 @@ fn main() -> ExitCode {
         Some(Command::Solve { file, variant, max_steps, ordering, tol, solution, deletion_error, json }) => {
             solve(&file, variant, max_steps, ordering, tol, solution, deletion_error, json)
         }
+        Some(Command::Pattern { file, out, ordering }) => pattern(&file, &out, ordering),
         Some(Command::BenchSolver { out, quick, data }) => {
             let cfg = pivotsim_server::bench::BenchConfig::new(out, quick, data);
             pivotsim_server::bench::run(&cfg).map(|_| ())
@@ -85,6 +99,25 @@ fn main() -> ExitCode {
             ExitCode::FAILURE
         }
     }
+}
+
+fn pattern(file: &std::path::Path, out: &std::path::Path, ordering: OrderingKind) -> anyhow::Result<()> {
+    let p = io::read_mlcp_file(file)?;
+    let info = pivotsim_server::plot::sparsity_svg(out, p.a(), ordering)?;
+    println!(
+        "{}: m={} nnz={} bandwidth {}→{} envelope {}→{} factor {} stored / {} non-zero → {}",
+        file.display(),
+        info.m,
+        info.nnz,
+        info.bandwidth_before,
+        info.bandwidth_after,
+        info.envelope_before,
+        info.envelope_after,
+        info.factor_entries,
+        info.factor_nonzeros,
+        out.display()
+    );
+    Ok(())
 }
 
 fn solve(

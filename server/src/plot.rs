@@ -58,14 +58,16 @@ pub fn sparsity_svg(path: &Path, a: &SymCsr, kind: OrderingKind) -> anyhow::Resu
     let root = SVGBackend::new(path, (1500, 540)).into_drawing_area();
     root.fill(&WHITE).map_err(plot_err)?;
     let panels = root.split_evenly((1, 3));
-    let title_a = format!("A, input order (bandwidth {}, envelope {})", info.bandwidth_before, info.envelope_before);
+    let title_a =
+        format!("A, input order (bandwidth {}, envelope {})", info.bandwidth_before, info.envelope_before);
     let title_p = format!(
         "A after {} (bandwidth {}, envelope {})",
         kind.name().to_uppercase(),
         info.bandwidth_after,
         info.envelope_after
     );
-    let title_l = format!("L0 on its envelope ({} stored, {} non-zero)", info.factor_entries, info.factor_nonzeros);
+    let title_l =
+        format!("L0 on its envelope ({} stored, {} non-zero)", info.factor_entries, info.factor_nonzeros);
     draw_matrix(&panels[0], &title_a, m, |draw| {
         for i in 0..m {
             for &j in a.row(i).0 {

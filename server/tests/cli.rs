@@ -78,3 +78,15 @@ fn a_broken_file_is_a_located_error() {
     assert!(err.contains("line 4"), "{err}");
     std::fs::remove_dir_all(&dir).ok();
 }
+
+#[test]
+fn pattern_writes_an_svg_with_the_reordered_bandwidth() {
+    let out = std::env::temp_dir().join(format!("pivotsim-cli-pattern-{}.svg", std::process::id()));
+    let o = bin().args(["pattern", example().to_str().unwrap(), "--out"]).arg(&out).output().unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(text.contains("bandwidth 425→28"), "{text}");
+    let svg = std::fs::read_to_string(&out).unwrap();
+    assert!(svg.starts_with("<svg"));
+    std::fs::remove_file(&out).ok();
+}
