@@ -2,5 +2,6 @@
 //! loader and the transports. The binary `pivotsim-server` is a thin CLI over this library.
 
 pub mod bench;
+pub mod dynamics;
 pub mod plot;
 pub mod solver;

@@ -1,0 +1,320 @@
+//! Typed errors of the dynamics, one enum per operation (iceoryx2/faer style): building the world
+//! ([`SettingsError`]), adding a body ([`BodyError`]), a joint ([`JointError`]) or a force element
+//! ([`ForceError`]), changing a body's state ([`StateError`]) and stepping ([`StepError`]).
+//! [`ModelError`] joins the model-building ones for callers (scene loaders) that want one type.
+//!
+//! Every error names the offending item (body or joint name, or id when no name applies). Soft
+//! outcomes of a step (solver hit its step cap, inexact residual) are not errors: they are in the
+//! per-island stats.
+
+use thiserror::Error;
+
+use super::body::BodyId;
+use super::joint::JointId;
+use crate::solver::MlcpError;
+
+/// Errors of [`World::new`](super::World::new).
+#[derive(Debug, Clone, PartialEq, Error)]
+pub enum SettingsError {
+    /// The time step must be finite and positive.
+    #[error("time step must be finite and > 0 (got {0})")]
+    InvalidTimestep(f64),
+    /// Gravity has a NaN or infinite component.
+    #[error("gravity must be finite (got [{}, {}, {}])", .0[0], .0[1], .0[2])]
+    NonFiniteGravity([f64; 3]),
+    /// An iteration count is unreasonably large (> 16).
+    #[error("{what} must be at most 16 (got {value})")]
+    TooManyIterations {
+        /// Which setting.
+        what: &'static str,
+        /// The value.
+        value: usize,
+    },
+}
+
+/// Errors of [`World::add_body`](super::World::add_body): the body builder's validation.
+#[derive(Debug, Clone, PartialEq, Error)]
+pub enum BodyError {
+    /// Bodies need a non-empty name.
+    #[error("a body needs a non-empty name")]
+    EmptyName,
+    /// Another body already has this name.
+    #[error("body '{body}': the name is already taken")]
+    DuplicateName {
+        /// The name.
+        body: String,
+    },
+    /// Mass of a dynamic body is zero, negative, NaN or infinite.
+    #[error("body '{body}': mass must be finite and > 0 (got {mass})")]
+    InvalidMass {
+        /// Body name.
+        body: String,
+        /// The mass given.
+        mass: f64,
+    },
+    /// A principal moment of inertia of a dynamic body is zero, negative, NaN or infinite.
+    #[error("body '{body}': principal inertia must be finite and > 0 (got [{}, {}, {}])", .inertia[0], .inertia[1], .inertia[2])]
+    InvalidInertia {
+        /// Body name.
+        body: String,
+        /// The principal moments given.
+        inertia: [f64; 3],
+    },
+    /// The principal moments violate the triangle inequality `I_i ≤ I_j + I_k` (no mass
+    /// distribution has them).
+    #[error("body '{body}': principal inertia [{}, {}, {}] violates I_i <= I_j + I_k", .inertia[0], .inertia[1], .inertia[2])]
+    NonPhysicalInertia {
+        /// Body name.
+        body: String,
+        /// The principal moments given.
+        inertia: [f64; 3],
+    },
+    /// A quaternion (orientation or inertia frame) is not of unit norm (or has a NaN).
+    #[error("body '{body}': {what} quaternion has norm {norm}, expected 1")]
+    NonUnitQuaternion {
+        /// Body name.
+        body: String,
+        /// `orientation` or `inertia frame`.
+        what: &'static str,
+        /// Its norm (NaN if a component is NaN).
+        norm: f64,
+    },
+    /// A position or velocity component is NaN or infinite.
+    #[error("body '{body}': {what} is not finite")]
+    NonFinite {
+        /// Body name.
+        body: String,
+        /// Which field.
+        what: &'static str,
+    },
+    /// A static body was given a velocity.
+    #[error("body '{body}': a static body cannot move (give it kind Kinematic to script its motion)")]
+    StaticBodyMoving {
+        /// Body name.
+        body: String,
+    },
+}
+
+/// Errors of [`World::add_joint`](super::World::add_joint).
+#[derive(Debug, Clone, PartialEq, Error)]
+pub enum JointError {
+    /// Joints need a non-empty name.
+    #[error("a joint needs a non-empty name")]
+    EmptyName,
+    /// Another joint already has this name.
+    #[error("joint '{joint}': the name is already taken")]
+    DuplicateName {
+        /// The name.
+        joint: String,
+    },
+    /// A body id that the world does not hold.
+    #[error("joint '{joint}': unknown body {body:?}")]
+    UnknownBody {
+        /// Joint name.
+        joint: String,
+        /// The id given.
+        body: BodyId,
+    },
+    /// Both ends of the joint are the same body.
+    #[error("joint '{joint}': joins body '{body}' to itself")]
+    SelfJoint {
+        /// Joint name.
+        joint: String,
+        /// Body name.
+        body: String,
+    },
+    /// Neither end is a dynamic body: the joint could never act.
+    #[error("joint '{joint}': neither body is dynamic")]
+    NoDynamicBody {
+        /// Joint name.
+        joint: String,
+    },
+    /// A joint axis is not of unit length (within 1e-6) or has a NaN.
+    #[error("joint '{joint}': axis has norm {norm}, expected 1")]
+    NonUnitAxis {
+        /// Joint name.
+        joint: String,
+        /// Its norm.
+        norm: f64,
+    },
+    /// A local frame's rotation is not a unit quaternion (or has a NaN).
+    #[error("joint '{joint}': {which} rotation has norm {norm}, expected 1")]
+    NonUnitFrame {
+        /// Joint name.
+        joint: String,
+        /// `frame_a` or `frame_b`.
+        which: &'static str,
+        /// Quaternion norm.
+        norm: f64,
+    },
+    /// An anchor or frame translation is not finite.
+    #[error("joint '{joint}': {what} is not finite")]
+    NonFinite {
+        /// Joint name.
+        joint: String,
+        /// Which field.
+        what: &'static str,
+    },
+    /// A row compliance is negative, NaN or infinite.
+    #[error("joint '{joint}': compliance of row {row} must be finite and >= 0 (got {value})")]
+    InvalidCompliance {
+        /// Joint name.
+        joint: String,
+        /// Row slot (0–5 locked rows, 6 lower limit, 7 upper limit, 8 motor).
+        row: usize,
+        /// The value.
+        value: f64,
+    },
+    /// The stabilization factor must lie in `[0, 1]`.
+    #[error("joint '{joint}': stabilization must lie in [0, 1] (got {value})")]
+    InvalidStabilization {
+        /// Joint name.
+        joint: String,
+        /// The value.
+        value: f64,
+    },
+    /// Limits or a motor on a joint without a free axis (fixed, ball).
+    #[error("joint '{joint}': a {kind} joint has no free axis for a limit or motor")]
+    NoFreeAxis {
+        /// Joint name.
+        joint: String,
+        /// Joint kind name.
+        kind: &'static str,
+    },
+    /// `lower > upper`, a NaN bound, or a non-finite / negative activation margin.
+    #[error("joint '{joint}': invalid limit [{lower}, {upper}] (margin {margin})")]
+    InvalidLimit {
+        /// Joint name.
+        joint: String,
+        /// Lower bound.
+        lower: f64,
+        /// Upper bound.
+        upper: f64,
+        /// Activation margin.
+        margin: f64,
+    },
+    /// A motor's target speed is not finite or its force bound is negative / not finite.
+    #[error("joint '{joint}': invalid motor (target speed {target_speed}, max force {max_force})")]
+    InvalidMotor {
+        /// Joint name.
+        joint: String,
+        /// Target speed.
+        target_speed: f64,
+        /// Force (torque) bound.
+        max_force: f64,
+    },
+}
+
+/// Errors of [`World::add_force`](super::World::add_force).
+#[derive(Debug, Clone, PartialEq, Error)]
+pub enum ForceError {
+    /// Force elements need a non-empty name.
+    #[error("a force element needs a non-empty name")]
+    EmptyName,
+    /// Another force element already has this name.
+    #[error("force '{force}': the name is already taken")]
+    DuplicateName {
+        /// The name.
+        force: String,
+    },
+    /// A body id that the world does not hold.
+    #[error("force '{force}': unknown body {body:?}")]
+    UnknownBody {
+        /// Force element name.
+        force: String,
+        /// The id given.
+        body: BodyId,
+    },
+    /// A spring from a body to itself.
+    #[error("force '{force}': attaches body '{body}' to itself")]
+    SelfAttached {
+        /// Force element name.
+        force: String,
+        /// Body name.
+        body: String,
+    },
+    /// Neither end is dynamic: the element could never act.
+    #[error("force '{force}': no dynamic body to act on")]
+    NoDynamicBody {
+        /// Force element name.
+        force: String,
+    },
+    /// A parameter is NaN, infinite or out of range.
+    #[error("force '{force}': {what} = {value} is not allowed")]
+    InvalidParameter {
+        /// Force element name.
+        force: String,
+        /// Which parameter.
+        what: &'static str,
+        /// The value.
+        value: f64,
+    },
+}
+
+/// Errors of changing a body's state ([`World::set_velocity`](super::World::set_velocity),
+/// [`World::set_pose`](super::World::set_pose)).
+#[derive(Debug, Clone, PartialEq, Error)]
+pub enum StateError {
+    /// A body id that the world does not hold.
+    #[error("unknown body {0:?}")]
+    UnknownBody(BodyId),
+    /// Static bodies do not move.
+    #[error("body '{0}' is static")]
+    StaticBody(String),
+    /// A NaN or infinite component, or a non-unit quaternion.
+    #[error("body '{body}': {what} is not finite or not a unit quaternion")]
+    Invalid {
+        /// Body name.
+        body: String,
+        /// Which value.
+        what: &'static str,
+    },
+}
+
+/// Errors of [`World::set_joint_motor`](super::World::set_joint_motor) (live control inputs).
+#[derive(Debug, Clone, PartialEq, Error)]
+pub enum ControlError {
+    /// A joint id that the world does not hold.
+    #[error("unknown joint {0:?}")]
+    UnknownJoint(JointId),
+    /// The joint has no free axis, or the motor is invalid.
+    #[error(transparent)]
+    Joint(#[from] JointError),
+}
+
+/// Errors of [`World::step`](super::World::step). On error the world state is left as it was
+/// before the step.
+#[derive(Debug, Clone, PartialEq, Error)]
+pub enum StepError {
+    /// The island's MLCP failed validation (a bug in the row assembly, or non-finite input).
+    #[error("island {island}: MLCP assembly failed: {source}")]
+    Assembly {
+        /// Island index in this step.
+        island: usize,
+        /// The solver's validation error.
+        source: MlcpError,
+    },
+    /// The new state of a body would not be finite.
+    #[error("body '{body}': the step produced a non-finite state")]
+    NonFinite {
+        /// Body name.
+        body: String,
+    },
+}
+
+/// Any model-building error: what a scene loader reports.
+#[derive(Debug, Clone, PartialEq, Error)]
+pub enum ModelError {
+    /// World settings.
+    #[error(transparent)]
+    Settings(#[from] SettingsError),
+    /// A body.
+    #[error(transparent)]
+    Body(#[from] BodyError),
+    /// A joint.
+    #[error(transparent)]
+    Joint(#[from] JointError),
+    /// A force element.
+    #[error(transparent)]
+    Force(#[from] ForceError),
+}
