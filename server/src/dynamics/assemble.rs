@@ -16,15 +16,14 @@
 //! computed and both `(i, j)` and `(j, i)` are emitted with the same value, so `A` is exactly
 //! symmetric. No `6n × 6n` matrix is ever formed; the cost is `Σ_k (rows at k)²`.
 //!
-//! All buffers are reused across islands and steps. The [`Mlcp`] itself owns its vectors (its API
-//! takes them by value), so building it copies the reused buffers: that copy is the only allocation
-//! of the assembly once the buffers have grown.
+//! All buffers are reused across islands and steps, and the [`Mlcp`] is refilled in place
+//! ([`Mlcp::assign`]): once the buffers have grown, the assembly allocates nothing.
 
 use nalgebra::{Matrix3, Vector3};
 
 use super::island::Islands;
 use super::rows::{ConstraintRow, Jac6};
-use crate::solver::{IndexState, Mlcp, MlcpError, SymCsr};
+use crate::solver::{IndexState, Mlcp, MlcpError};
 
 /// What the assembly needs of each body (world-indexed).
 #[derive(Debug, Clone, Copy)]
@@ -193,13 +192,15 @@ impl Assembler {
         }
     }
 
-    /// Builds the validated [`Mlcp`] of the last assembled island, with the warm start in
-    /// `lambda0`/`index0` when `warm` is set.
-    pub fn mlcp(&self, warm: bool) -> Result<Mlcp, MlcpError> {
+    /// Fills `problem` (in place, reusing its buffers) with the validated [`Mlcp`] of the last
+    /// assembled island, with the warm start in `lambda0`/`index0` when `warm` is set.
+    pub fn fill_mlcp(&mut self, problem: &mut Mlcp, warm: bool) -> Result<(), MlcpError> {
         let m = self.b.len();
-        let a = SymCsr::from_triplets(m, &self.triplets)?;
-        let p = Mlcp::new(a, self.b.clone(), self.lo.clone(), self.hi.clone(), self.findex.clone())?;
-        if warm { p.with_warm_start(Some(self.lambda0.clone()), Some(self.index0.clone())) } else { Ok(p) }
+        problem.assign(m, &mut self.triplets, &self.b, &self.lo, &self.hi, &self.findex)?;
+        if warm {
+            problem.set_warm_start(Some(&self.lambda0), Some(&self.index0))?;
+        }
+        Ok(())
     }
 
     /// Adds `M⁻¹ Jᵀ λ` of the island rows (with `self.lambda`) to the velocities `v`, `w`
@@ -294,7 +295,8 @@ mod tests {
         let h = 0.1;
         let mut asm = Assembler::default();
         asm.assemble(0, &isl, &rows, &motion, h);
-        let p = asm.mlcp(false).unwrap();
+        let mut p = Mlcp::default();
+        asm.fill_mlcp(&mut p, false).unwrap();
         // Dense reference.
         let m = rows.len();
         let mut j = DMatrix::zeros(m, 6 * n);

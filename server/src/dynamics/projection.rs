@@ -104,13 +104,15 @@ pub(crate) fn project(
             }
             let t = Instant::now();
             ws.asm.assemble(k, &ws.proj_islands, &ws.proj_rows, &ws.proj_motion, h);
-            let p = ws.asm.mlcp(false).map_err(|source| StepError::Assembly { island: k, source })?;
+            ws.asm
+                .fill_mlcp(&mut ws.problem, false)
+                .map_err(|source| StepError::Assembly { island: k, source })?;
             if ws.proj_solvers.len() <= solved {
                 ws.proj_solvers.push(Solver::new(settings.solver));
             }
             ws.asm.lambda.clear();
             ws.asm.lambda.resize(m, 0.0);
-            ws.proj_solvers[solved].solve(&p, &mut ws.asm.lambda);
+            ws.proj_solvers[solved].solve(&ws.problem, &mut ws.asm.lambda);
             ws.asm.apply_impulses(
                 k,
                 &ws.proj_islands,

@@ -35,9 +35,9 @@
 //! **Failure.** If a new state is not finite, the step returns [`StepError::NonFinite`] and leaves
 //! the bodies unchanged. Solver soft outcomes (step cap, inexact) are in [`IslandStats`].
 //!
-//! **Allocation.** Every buffer lives in [`StepWorkspace`] and is cleared and reused; after the first
-//! step of a scene only the [`Mlcp`](crate::solver::Mlcp) construction allocates (its API takes
-//! owned vectors and builds its CSR matrix from a copy of the triplets).
+//! **Allocation.** Every buffer lives in [`StepWorkspace`] and is cleared and reused, and the island
+//! problem is refilled in place ([`Mlcp::assign`](crate::solver::Mlcp::assign)): once the first
+//! steps of a scene have sized them, a step allocates nothing.
 
 use std::time::Instant;
 
@@ -52,7 +52,7 @@ use super::joint_rows::{Side, push_joint_rows};
 use super::rows::{ConstraintRow, RowKey, RowKind};
 use super::stats::IslandStats;
 use super::world::{World, WorldSettings};
-use crate::solver::{IndexState, Solver};
+use crate::solver::{IndexState, Mlcp, Solver};
 
 /// Persistent state of one joint row slot: index state and impulse of the step it was last solved in.
 #[derive(Debug, Clone, Copy, Default)]
@@ -73,6 +73,8 @@ pub(crate) struct StepWorkspace {
     pub rows: Vec<ConstraintRow>,
     pub islands: Islands,
     pub asm: Assembler,
+    /// The island problem, refilled in place for every island.
+    pub problem: Mlcp,
     pub solvers: Vec<Solver>,
     pub v_new: Vec<Vector3<f64>>,
     pub w_new: Vec<Vector3<f64>>,
@@ -203,10 +205,11 @@ impl StepWorkspace {
         let m = self.islands.rows(k).len();
         self.asm.lambda.clear();
         self.asm.lambda.resize(m, 0.0);
-        let p =
-            self.asm.mlcp(settings.warm_start).map_err(|source| StepError::Assembly { island: k, source })?;
+        self.asm
+            .fill_mlcp(&mut self.problem, settings.warm_start)
+            .map_err(|source| StepError::Assembly { island: k, source })?;
         let assemble_us = t.elapsed().as_secs_f64() * 1e6;
-        let s = self.solvers[solved].solve(&p, &mut self.asm.lambda);
+        let s = self.solvers[solved].solve(&self.problem, &mut self.asm.lambda);
         let st = IslandStats {
             island: k,
             bodies: self.islands.bodies(k).len(),

@@ -150,6 +150,8 @@ pub struct SymCsr {
     next: Vec<usize>,
     /// After [`SymCsr::permuted_from`]: the source position of every entry (not part of the value).
     src: Vec<usize>,
+    /// Scratch of [`SymCsr::assign_from_triplets`] (not part of the value).
+    sym: Vec<(usize, usize, f64)>,
 }
 
 impl PartialEq for SymCsr {
@@ -188,7 +190,7 @@ impl SymCsr {
             }
             row_ptr.push(col.len());
         }
-        let m = SymCsr { n, row_ptr, col, val, next: Vec::new(), src: Vec::new() };
+        let m = SymCsr { n, row_ptr, col, val, ..Default::default() };
         m.check_diagonal()?;
         Ok(m)
     }
@@ -196,63 +198,92 @@ impl SymCsr {
     /// Builds from `(row, col, value)` triplets that list every stored entry of *both* triangles
     /// (the sparse form of `MLCP_FORMAT.md`). A repeated `(i, j)` is an error.
     pub fn from_triplets(n: usize, triplets: &[(usize, usize, f64)]) -> Result<Self, MlcpError> {
-        let mut entries: Vec<(usize, usize, f64)> = Vec::with_capacity(triplets.len() + n);
-        for &(i, j, v) in triplets {
+        let mut t = triplets.to_vec();
+        let mut m = SymCsr::default();
+        m.assign_from_triplets(n, &mut t)?;
+        Ok(m)
+    }
+
+    /// In-place [`SymCsr::from_triplets`]: sorts `triplets` in place and reuses `self`'s buffers,
+    /// so that rebuilding a matrix of the same size every time step allocates nothing. Mirrors
+    /// agree within [`SYMMETRY_TOL`] and are averaged; an entry whose mirror is missing (so it must
+    /// be tiny) gets a stored mirror, so the pattern is always symmetric. On error `self` is left
+    /// empty (`n = 0`), never half-built.
+    pub fn assign_from_triplets(
+        &mut self,
+        n: usize,
+        triplets: &mut [(usize, usize, f64)],
+    ) -> Result<(), MlcpError> {
+        let result = self.assign_inner(n, triplets);
+        if result.is_err() {
+            self.n = 0;
+            self.row_ptr.clear();
+            self.row_ptr.push(0);
+            self.col.clear();
+            self.val.clear();
+        }
+        result
+    }
+
+    fn assign_inner(&mut self, n: usize, triplets: &mut [(usize, usize, f64)]) -> Result<(), MlcpError> {
+        for &(i, j, v) in triplets.iter() {
             if i >= n || j >= n {
                 return Err(MlcpError::EntryOutOfRange { row: i, col: j, n });
             }
             if !v.is_finite() {
                 return Err(MlcpError::NonFiniteMatrix { row: i, col: j, value: v });
             }
-            entries.push((i, j, v));
         }
-        entries.sort_unstable_by_key(|&(i, j, _)| (i, j));
-        for w in entries.windows(2) {
+        triplets.sort_unstable_by_key(|&(i, j, _)| (i, j));
+        for w in triplets.windows(2) {
             if (w[0].0, w[0].1) == (w[1].0, w[1].1) {
                 return Err(MlcpError::DuplicateEntry { row: w[0].0, col: w[0].1 });
             }
         }
-        let find = |i: usize, j: usize| -> f64 {
-            entries.binary_search_by_key(&(i, j), |&(a, b, _)| (a, b)).map(|k| entries[k].2).unwrap_or(0.0)
+        let entries: &[(usize, usize, f64)] = triplets;
+        let find = |i: usize, j: usize| -> Option<f64> {
+            entries.binary_search_by_key(&(i, j), |&(a, b, _)| (a, b)).ok().map(|k| entries[k].2)
         };
-        let mut row_ptr = Vec::with_capacity(n + 1);
-        let mut col = Vec::with_capacity(entries.len() + n);
-        let mut val = Vec::with_capacity(entries.len() + n);
-        row_ptr.push(0);
+        // Symmetric entry list: every entry (averaged with its mirror), missing mirrors, missing
+        // diagonal entries; then one sort and a linear pass.
+        let mut sym = std::mem::take(&mut self.sym);
+        sym.clear();
+        for &(i, j, aij) in entries {
+            if i == j {
+                sym.push((i, i, aij));
+                continue;
+            }
+            let mirror = find(j, i);
+            let aji = mirror.unwrap_or(0.0);
+            check_symmetric(i, j, aij, aji, find(i, i).unwrap_or(0.0), find(j, j).unwrap_or(0.0))?;
+            let v = 0.5 * (aij + aji);
+            sym.push((i, j, v));
+            if mirror.is_none() {
+                sym.push((j, i, v));
+            }
+        }
+        for i in 0..n {
+            if find(i, i).is_none() {
+                sym.push((i, i, 0.0));
+            }
+        }
+        sym.sort_unstable_by_key(|&(i, j, _)| (i, j));
+        self.n = n;
+        self.row_ptr.clear();
+        self.col.clear();
+        self.val.clear();
+        self.row_ptr.push(0);
         let mut k = 0;
         for i in 0..n {
-            let mut diag_done = false;
-            while k < entries.len() && entries[k].0 == i {
-                let (_, j, aij) = entries[k];
-                if j > i && !diag_done {
-                    col.push(i);
-                    val.push(0.0);
-                    diag_done = true;
-                }
-                if j == i {
-                    diag_done = true;
-                    col.push(j);
-                    val.push(aij);
-                } else {
-                    let aji = find(j, i);
-                    check_symmetric(i, j, aij, aji, find(i, i), find(j, j))?;
-                    col.push(j);
-                    val.push(0.5 * (aij + aji));
-                }
+            while k < sym.len() && sym[k].0 == i {
+                self.col.push(sym[k].1);
+                self.val.push(sym[k].2);
                 k += 1;
             }
-            if !diag_done {
-                col.push(i);
-                val.push(0.0);
-            }
-            row_ptr.push(col.len());
+            self.row_ptr.push(self.col.len());
         }
-        // Entries present only in the upper or lower triangle: their mirror is missing (read as 0).
-        // `check_symmetric` above caught every entry whose mirror differs, including a missing one,
-        // so the pattern is symmetric here.
-        let m = SymCsr { n, row_ptr, col, val, next: Vec::new(), src: Vec::new() };
-        m.check_diagonal()?;
-        Ok(m)
+        self.sym = sym;
+        self.check_diagonal()
     }
 
     /// A diagonal matrix.
@@ -458,8 +489,9 @@ impl IndexState {
     }
 }
 
-/// A validated boxed MLCP with optional friction coupling and warm start.
-#[derive(Debug, Clone, PartialEq)]
+/// A validated boxed MLCP with optional friction coupling and warm start. `Default` is the empty
+/// problem, to be filled with [`Mlcp::assign`].
+#[derive(Debug, Clone, Default)]
 pub struct Mlcp {
     a: SymCsr,
     b: Vec<f64>,
@@ -469,6 +501,21 @@ pub struct Mlcp {
     nub: usize,
     lambda0: Option<Vec<f64>>,
     index0: Option<Vec<IndexState>>,
+    /// Buffers of a cleared warm start, kept for reuse (not part of the value).
+    spare: (Vec<f64>, Vec<IndexState>),
+}
+
+impl PartialEq for Mlcp {
+    fn eq(&self, o: &Self) -> bool {
+        self.a == o.a
+            && self.b == o.b
+            && self.lo == o.lo
+            && self.hi == o.hi
+            && self.findex == o.findex
+            && self.nub == o.nub
+            && self.lambda0 == o.lambda0
+            && self.index0 == o.index0
+    }
 }
 
 impl Mlcp {
@@ -480,44 +527,100 @@ impl Mlcp {
         hi: Vec<f64>,
         findex: Vec<Option<usize>>,
     ) -> Result<Self, MlcpError> {
-        let n = a.n();
-        for (what, len) in [("b", b.len()), ("lo", lo.len()), ("hi", hi.len()), ("findex", findex.len())] {
-            if len != n {
-                return Err(MlcpError::DimensionMismatch { what, expected: n, found: len });
+        let nub = validate_vectors(a.n(), &b, &lo, &hi, &findex)?;
+        Ok(Mlcp { a, b, lo, hi, findex, nub, ..Default::default() })
+    }
+
+    /// Rebuilds `self` in place (reusing every buffer: no allocation once they have grown), with
+    /// the same validation as [`SymCsr::from_triplets`] and [`Mlcp::new`]; `triplets` is sorted in
+    /// place. The warm start is cleared. On error `self` is left as an empty problem, never
+    /// half-built.
+    pub fn assign(
+        &mut self,
+        n: usize,
+        triplets: &mut [(usize, usize, f64)],
+        b: &[f64],
+        lo: &[f64],
+        hi: &[f64],
+        findex: &[Option<usize>],
+    ) -> Result<(), MlcpError> {
+        self.clear_warm_start();
+        let result =
+            self.a.assign_from_triplets(n, triplets).and_then(|()| validate_vectors(n, b, lo, hi, findex));
+        match result {
+            Ok(nub) => {
+                self.nub = nub;
+                fill_from(&mut self.b, b);
+                fill_from(&mut self.lo, lo);
+                fill_from(&mut self.hi, hi);
+                fill_from(&mut self.findex, findex);
+                Ok(())
+            }
+            Err(e) => {
+                let mut empty: [(usize, usize, f64); 0] = [];
+                self.a.assign_from_triplets(0, &mut empty).expect("the empty matrix is valid");
+                self.b.clear();
+                self.lo.clear();
+                self.hi.clear();
+                self.findex.clear();
+                self.nub = 0;
+                Err(e)
             }
         }
-        for (i, &v) in b.iter().enumerate() {
-            if !v.is_finite() {
-                return Err(MlcpError::NonFiniteVector { vector: "b", index: i, value: v });
-            }
-        }
-        for i in 0..n {
-            let (l, h) = (lo[i], hi[i]);
-            if l.is_nan() {
-                return Err(MlcpError::NonFiniteVector { vector: "lo", index: i, value: l });
-            }
-            if h.is_nan() {
-                return Err(MlcpError::NonFiniteVector { vector: "hi", index: i, value: h });
-            }
-            if l > h || l == f64::INFINITY || h == f64::NEG_INFINITY {
-                return Err(MlcpError::EmptyBox { index: i, lo: l, hi: h });
-            }
-        }
-        for i in 0..n {
-            if let Some(j) = findex[i] {
-                if j >= n || j == i {
-                    return Err(MlcpError::FindexOutOfRange { row: i, target: j as i64 });
+    }
+
+    /// In-place warm start (reusing buffers): an initial `λ` and/or index set, validated like
+    /// [`Mlcp::with_warm_start`]; on error the warm start is cleared.
+    pub fn set_warm_start(
+        &mut self,
+        lambda0: Option<&[f64]>,
+        index0: Option<&[IndexState]>,
+    ) -> Result<(), MlcpError> {
+        let n = self.n();
+        let check = || -> Result<(), MlcpError> {
+            if let Some(l) = lambda0 {
+                if l.len() != n {
+                    return Err(MlcpError::DimensionMismatch {
+                        what: "lambda0",
+                        expected: n,
+                        found: l.len(),
+                    });
                 }
-                if findex[j].is_some() {
-                    return Err(MlcpError::FindexToFrictionRow { row: i, target: j });
-                }
-                if !(lo[i].is_finite() && hi[i].is_finite() && lo[i] <= 0.0 && hi[i] >= 0.0) {
-                    return Err(MlcpError::FrictionCoefficients { row: i, lo: lo[i], hi: hi[i] });
+                if let Some((i, &v)) = l.iter().enumerate().find(|(_, v)| !v.is_finite()) {
+                    return Err(MlcpError::NonFiniteVector { vector: "lambda0", index: i, value: v });
                 }
             }
+            if let Some(s) = index0
+                && s.len() != n
+            {
+                return Err(MlcpError::DimensionMismatch { what: "index0", expected: n, found: s.len() });
+            }
+            Ok(())
+        };
+        let checked = check();
+        self.clear_warm_start();
+        checked?;
+        if let Some(l) = lambda0 {
+            let mut v = std::mem::take(&mut self.spare.0);
+            fill_from(&mut v, l);
+            self.lambda0 = Some(v);
         }
-        let nub = (0..n).take_while(|&i| lo[i] == f64::NEG_INFINITY && hi[i] == f64::INFINITY).count();
-        Ok(Mlcp { a, b, lo, hi, findex, nub, lambda0: None, index0: None })
+        if let Some(s) = index0 {
+            let mut v = std::mem::take(&mut self.spare.1);
+            fill_from(&mut v, s);
+            self.index0 = Some(v);
+        }
+        Ok(())
+    }
+
+    /// Drops the warm start, keeping its buffers for the next one.
+    fn clear_warm_start(&mut self) {
+        if let Some(v) = self.lambda0.take() {
+            self.spare.0 = v;
+        }
+        if let Some(v) = self.index0.take() {
+            self.spare.1 = v;
+        }
     }
 
     /// Adds a warm start: an initial `λ` and/or an initial index set. Validated like the rest.
@@ -606,6 +709,58 @@ impl Mlcp {
         self.residual_velocity(lambda, w);
         natural_residual(lambda, w, &self.lo, &self.hi, &self.findex)
     }
+}
+
+/// Checks `b`, the bounds and the friction index of an `n`-row problem; returns `nub`.
+fn validate_vectors(
+    n: usize,
+    b: &[f64],
+    lo: &[f64],
+    hi: &[f64],
+    findex: &[Option<usize>],
+) -> Result<usize, MlcpError> {
+    for (what, len) in [("b", b.len()), ("lo", lo.len()), ("hi", hi.len()), ("findex", findex.len())] {
+        if len != n {
+            return Err(MlcpError::DimensionMismatch { what, expected: n, found: len });
+        }
+    }
+    for (i, &v) in b.iter().enumerate() {
+        if !v.is_finite() {
+            return Err(MlcpError::NonFiniteVector { vector: "b", index: i, value: v });
+        }
+    }
+    for i in 0..n {
+        let (l, h) = (lo[i], hi[i]);
+        if l.is_nan() {
+            return Err(MlcpError::NonFiniteVector { vector: "lo", index: i, value: l });
+        }
+        if h.is_nan() {
+            return Err(MlcpError::NonFiniteVector { vector: "hi", index: i, value: h });
+        }
+        if l > h || l == f64::INFINITY || h == f64::NEG_INFINITY {
+            return Err(MlcpError::EmptyBox { index: i, lo: l, hi: h });
+        }
+    }
+    for i in 0..n {
+        if let Some(j) = findex[i] {
+            if j >= n || j == i {
+                return Err(MlcpError::FindexOutOfRange { row: i, target: j as i64 });
+            }
+            if findex[j].is_some() {
+                return Err(MlcpError::FindexToFrictionRow { row: i, target: j });
+            }
+            if !(lo[i].is_finite() && hi[i].is_finite() && lo[i] <= 0.0 && hi[i] >= 0.0) {
+                return Err(MlcpError::FrictionCoefficients { row: i, lo: lo[i], hi: hi[i] });
+            }
+        }
+    }
+    Ok((0..n).take_while(|&i| lo[i] == f64::NEG_INFINITY && hi[i] == f64::INFINITY).count())
+}
+
+/// `dst = src`, reusing `dst`'s capacity.
+fn fill_from<T: Clone>(dst: &mut Vec<T>, src: &[T]) {
+    dst.clear();
+    dst.extend_from_slice(src);
 }
 
 /// Effective bounds of a row given the stored bounds, its friction index and the impulses.
@@ -778,5 +933,44 @@ mod tests {
         let mut fresh = SymCsr::default();
         fresh.permuted_from(&b, &perm, &inv);
         assert_eq!(p, fresh);
+    }
+
+    #[test]
+    fn missing_mirrors_get_a_stored_mirror() {
+        // (0, 1) is given, its mirror is not (tiny value: within the symmetry tolerance).
+        let a = SymCsr::from_triplets(2, &[(0, 0, 1.0), (1, 1, 1.0), (0, 1, 1e-14)]).unwrap();
+        assert_eq!(a.row(0).0, &[0, 1]);
+        assert_eq!(a.row(1).0, &[0, 1]);
+        assert_eq!(a.get(0, 1), a.get(1, 0));
+        // A permutation of it is consistent.
+        let mut p = SymCsr::default();
+        p.permuted_from(&a, &[1, 0], &[1, 0]);
+        assert_eq!(p.get(1, 0), a.get(0, 1));
+    }
+
+    #[test]
+    fn assign_rebuilds_in_place_and_empties_on_error() {
+        let mut t = vec![(1, 0, 0.5), (0, 0, 2.0), (0, 1, 0.5), (1, 1, 2.0)];
+        let mut p = Mlcp::default();
+        p.assign(2, &mut t, &[1.0, 1.0], &[0.0, 0.0], &[f64::INFINITY; 2], &[None, None]).unwrap();
+        let fresh = Mlcp::new(
+            SymCsr::from_dense_row_major(2, &[2.0, 0.5, 0.5, 2.0]).unwrap(),
+            vec![1.0, 1.0],
+            vec![0.0, 0.0],
+            vec![f64::INFINITY; 2],
+            vec![None, None],
+        )
+        .unwrap();
+        assert_eq!(p, fresh);
+        p.set_warm_start(Some(&[0.1, 0.2]), Some(&[IndexState::Free, IndexState::Lower])).unwrap();
+        assert_eq!(p.lambda0(), Some(&[0.1, 0.2][..]));
+        assert!(p.set_warm_start(Some(&[f64::NAN, 0.0]), None).is_err());
+        assert_eq!(p.lambda0(), None);
+        // Bad input: typed error, and the problem is empty rather than half-built.
+        let mut bad = vec![(0, 0, 1.0), (1, 1, f64::NAN)];
+        let e = p.assign(2, &mut bad, &[1.0, 1.0], &[0.0; 2], &[1.0; 2], &[None, None]).unwrap_err();
+        assert!(matches!(e, MlcpError::NonFiniteMatrix { row: 1, col: 1, .. }));
+        assert_eq!(p.n(), 0);
+        assert!(p.b().is_empty());
     }
 }
