@@ -1,8 +1,59 @@
-//! Wire types of pivotsim (plain data, no nalgebra, nothing of the server).
+//! Wire types of pivotsim: plain data shared by the server, its clients and bridges (no nalgebra,
+//! nothing of the server).
 //!
-//! The message set (pose frames, solver statistics, operator inputs, control requests, scene
-//! description) is specified by the server issue; until it lands this crate only names the solver
-//! variants as they travel on the wire, so that every side spells them the same way.
+//! Every message is a *frame*: a 16-byte header (magic `PVSM`, format version, kind, payload
+//! length, flags; see [`header`]) followed by the payload. The high-rate frames — [`PoseFrame`]
+//! and [`SolverStats`] — and the operator inputs ([`InputCommand`]) have compact little-endian
+//! binary payloads of fixed-size records, so the same bytes travel over Zenoh and in iceoryx2
+//! `[u8]` samples. The low-rate frames — [`ControlRequest`], [`ControlReply`] and
+//! [`SceneDescription`] — carry JSON in the same header. `msgs/README.md` documents every byte.
+//!
+//! Each message family has `encode(&self, &mut Vec<u8>)` (the buffer is cleared and reused: no
+//! allocation once it has grown; the content is validated first) and `decode(&[u8])` (validated,
+//! typed errors: [`DecodeError<E>`] is a [`FrameError`] or the family's content error `E`).
+//! [`PoseFrameView`] iterates the bodies of a pose frame straight from the received bytes without
+//! allocating; [`PoseFrameWriter`] writes them without an intermediate vector.
+//!
+//! Key expressions and iceoryx2 service names are built by [`WorldName::key`] from a [`Topic`].
+
+pub mod header;
+
+mod codes;
+mod control;
+mod input;
+mod json;
+mod keys;
+mod le;
+mod message;
+mod name;
+mod pose;
+mod scene;
+mod stats;
+
+pub use codes::{ActuatorMode, REJECT_REASONS, RejectReason, SolveStatus, SolverVariant};
+pub use control::{
+    ControlCommand, ControlError, ControlErrorCode, ControlFailure, ControlOutcome, ControlReply,
+    ControlRequest, MAX_MESSAGE_LEN, MAX_SCENE_REF_LEN, MAX_STEP_COUNT, ServerStatus,
+};
+pub use header::{DecodeError, FORMAT_VERSION, FrameError, HEADER_LEN, Header, Kind, MAGIC, MAX_FRAME_LEN};
+pub use input::{
+    ACTUATOR_LEN, ActuatorCommand, BOOM_ENTRY_LEN, BOOM_FIXED_LEN, BoomCommand, BoomTarget, InputCommand,
+    InputError, JOYSTICK_LEN, Joystick, MAX_AXES, MAX_BOOM_TARGETS, MAX_BUTTONS, WINCH_LEN, WinchCommand,
+};
+pub use keys::{
+    DEFAULT_WORLD, KEY_PREFIX, KeyError, MAX_WORLD_NAME_LEN, Topic, WorldName, inputs_wildcard, parse_key,
+};
+pub use message::{Message, MessageError};
+pub use name::{ActuatorName, MAX_ACTUATOR_NAME_LEN, NameError, is_name_byte, validate_actuator_name};
+pub use pose::{
+    BODY_ASLEEP, BODY_FLAGS_KNOWN, BODY_KINEMATIC, BODY_RECORD_LEN, BODY_STATIC, BodyIter, BodyPose,
+    MAX_BODIES, POSE_FIXED_LEN, PoseError, PoseFrame, PoseFrameView, PoseFrameWriter, QUAT_NORM_TOLERANCE,
+};
+pub use scene::*;
+pub use stats::{
+    ISLAND_FALLBACK, ISLAND_RECORD_LEN, InputHealth, IslandStats, MAX_ISLANDS, STATS_FIXED_LEN, SolverStats,
+    StatsError, StepTotals,
+};
 
 /// Solver variant names as they appear on the wire, in the CLI and in reports.
 pub const SOLVER_VARIANTS: [&str; 7] =

@@ -1,0 +1,406 @@
+//! Control requests and replies (kinds `0x0100`, `0x0101`, JSON) for the `control` queryable.
+//!
+//! ```json
+//! {"id":7,"command":{"op":"pause"}}
+//! {"id":8,"command":{"op":"resume"}}
+//! {"id":9,"command":{"op":"step","count":1}}
+//! {"id":10,"command":{"op":"reset"}}
+//! {"id":11,"command":{"op":"set_variant","variant":"skyline"}}
+//! {"id":12,"command":{"op":"load_scene","scene":"winch"}}
+//!
+//! {"id":11,"outcome":{"ok":{"scene":"winch","paused":false,"sequence":420,"sim_time":7.0,"variant":"skyline"}}}
+//! {"id":11,"outcome":{"error":{"code":"unknown_variant","message":"no variant \"fast\""}}}
+//! ```
+//!
+//! `id` is chosen by the client and echoed by the reply. `step` advances a paused world by `count`
+//! steps (1 ..= 3600) and leaves it paused. `set_variant` takes one of the seven solver variant
+//! names and applies from the next step. `load_scene` takes a scene name or path (1 ..= 256 bytes,
+//! no control characters) and starts it paused at time 0. The reply's `ok` carries the state after
+//! the request; `error` carries a code (`invalid_request`, `unknown_variant`, `unknown_scene`,
+//! `scene_load_failed`, `busy`, `internal`) and a message of at most 1024 bytes.
+
+use crate::codes::SolverVariant;
+use crate::header::{DecodeError, Kind};
+use crate::json;
+
+/// Most steps of one `step` request (one minute at 60 Hz).
+pub const MAX_STEP_COUNT: u32 = 3600;
+/// Longest scene name or path, in bytes.
+pub const MAX_SCENE_REF_LEN: usize = 256;
+/// Longest error message, in bytes.
+pub const MAX_MESSAGE_LEN: usize = 1024;
+
+/// A control request.
+#[derive(Debug, Clone, PartialEq, Eq, serde::Serialize)]
+pub struct ControlRequest {
+    /// Echoed by the reply (keep below 2^53 for JavaScript clients).
+    pub id: u64,
+    /// What to do.
+    pub command: ControlCommand,
+}
+
+/// What a control request asks for.
+#[derive(Debug, Clone, PartialEq, Eq, serde::Serialize)]
+#[serde(tag = "op", rename_all = "snake_case")]
+pub enum ControlCommand {
+    /// Stop stepping (publishing continues with the last state).
+    Pause,
+    /// Step in real time again.
+    Resume,
+    /// Advance a paused world by `count` steps.
+    Step {
+        /// `1 ..= MAX_STEP_COUNT`.
+        count: u32,
+    },
+    /// Restart the current scene, paused at time 0.
+    Reset,
+    /// Switch the solver variant live.
+    SetVariant {
+        /// New variant.
+        variant: SolverVariant,
+    },
+    /// Load another scene by name or path, paused at time 0.
+    LoadScene {
+        /// Scene name or path.
+        scene: String,
+    },
+}
+
+/// A reply to a control request.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct ControlReply {
+    /// The request's id.
+    pub id: u64,
+    /// Success with the state after the request, or a typed failure.
+    pub outcome: ControlOutcome,
+}
+
+/// Success or failure of a control request.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ControlOutcome {
+    /// Done; the server's state afterwards.
+    Ok(ServerStatus),
+    /// Refused or failed.
+    Error(ControlFailure),
+}
+
+/// The server's state, as reported by a successful control reply.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ServerStatus {
+    /// Scene name or path.
+    pub scene: String,
+    /// Stepping is paused.
+    pub paused: bool,
+    /// Sequence of the last published step.
+    pub sequence: u64,
+    /// Simulation time (s).
+    pub sim_time: f64,
+    /// Solver variant in use.
+    pub variant: SolverVariant,
+}
+
+/// Why a control request failed.
+#[derive(Debug, Clone, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ControlFailure {
+    /// Machine-readable reason.
+    pub code: ControlErrorCode,
+    /// Human-readable detail (≤ [`MAX_MESSAGE_LEN`] bytes).
+    pub message: String,
+}
+
+/// Machine-readable reason of a failed control request.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ControlErrorCode {
+    /// The request frame did not decode.
+    InvalidRequest,
+    /// `set_variant` with a name the server does not know.
+    UnknownVariant,
+    /// `load_scene` with a scene that does not exist.
+    UnknownScene,
+    /// The scene exists but did not load.
+    SceneLoadFailed,
+    /// The server cannot do it now (e.g. `step` while running).
+    Busy,
+    /// Anything else.
+    Internal,
+}
+
+/// What is wrong with the content of a control request or reply.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum ControlError {
+    /// Not one of the seven solver variant names.
+    #[error("unknown solver variant {name:?}")]
+    UnknownVariant {
+        /// The name sent.
+        name: String,
+    },
+    /// `step` count of 0 or above [`MAX_STEP_COUNT`].
+    #[error("step count {count} outside 1..={MAX_STEP_COUNT}")]
+    StepCount {
+        /// The count sent.
+        count: u32,
+    },
+    /// Empty scene name or path.
+    #[error("empty scene name")]
+    EmptyScene,
+    /// Scene name or path above [`MAX_SCENE_REF_LEN`] bytes.
+    #[error("scene name of {len} bytes (at most {MAX_SCENE_REF_LEN})")]
+    SceneTooLong {
+        /// Length in bytes.
+        len: usize,
+    },
+    /// A control character (including NUL) in a scene name or path.
+    #[error("control character at byte {index} of the scene name")]
+    SceneChar {
+        /// Byte offset.
+        index: usize,
+    },
+    /// Failure message above [`MAX_MESSAGE_LEN`] bytes.
+    #[error("message of {len} bytes (at most {MAX_MESSAGE_LEN})")]
+    MessageTooLong {
+        /// Length in bytes.
+        len: usize,
+    },
+    /// `sim_time` not finite or negative.
+    #[error("sim_time {value} is not a finite non-negative number")]
+    SimTime {
+        /// The value.
+        value: f64,
+    },
+    /// The encoded payload exceeds the kind's maximum (encode only).
+    #[error("encoded payload of {len} bytes exceeds the maximum")]
+    TooLarge {
+        /// Payload length.
+        len: usize,
+    },
+}
+
+pub(crate) fn check_scene_ref(s: &str) -> Result<(), ControlError> {
+    if s.is_empty() {
+        return Err(ControlError::EmptyScene);
+    }
+    if s.len() > MAX_SCENE_REF_LEN {
+        return Err(ControlError::SceneTooLong { len: s.len() });
+    }
+    match s.bytes().position(|b| b.is_ascii_control()) {
+        Some(index) => Err(ControlError::SceneChar { index }),
+        None => Ok(()),
+    }
+}
+
+fn variant(name: String) -> Result<SolverVariant, ControlError> {
+    SolverVariant::from_name(&name).ok_or(ControlError::UnknownVariant { name })
+}
+
+/// Mirrors of the public types with names as plain strings, so that an unknown variant name is a
+/// typed [`ControlError`] rather than a JSON schema error.
+mod raw {
+    #[derive(serde::Deserialize)]
+    #[serde(deny_unknown_fields)]
+    pub(super) struct Request {
+        pub id: u64,
+        pub command: Command,
+    }
+
+    #[derive(serde::Deserialize)]
+    #[serde(tag = "op", rename_all = "snake_case", deny_unknown_fields)]
+    pub(super) enum Command {
+        // Empty struct variants (not unit variants) so that `deny_unknown_fields` rejects extra
+        // fields next to the tag.
+        Pause {},
+        Resume {},
+        Step { count: u32 },
+        Reset {},
+        SetVariant { variant: String },
+        LoadScene { scene: String },
+    }
+
+    #[derive(serde::Deserialize)]
+    #[serde(deny_unknown_fields)]
+    pub(super) struct Reply {
+        pub id: u64,
+        pub outcome: Outcome,
+    }
+
+    #[derive(serde::Deserialize)]
+    #[serde(rename_all = "snake_case")]
+    pub(super) enum Outcome {
+        Ok(Status),
+        Error(super::ControlFailure),
+    }
+
+    #[derive(serde::Deserialize)]
+    #[serde(deny_unknown_fields)]
+    pub(super) struct Status {
+        pub scene: String,
+        pub paused: bool,
+        pub sequence: u64,
+        pub sim_time: f64,
+        pub variant: String,
+    }
+}
+
+impl ControlRequest {
+    /// Checks every rule a decoder checks.
+    pub fn validate(&self) -> Result<(), ControlError> {
+        match &self.command {
+            ControlCommand::Step { count } if *count == 0 || *count > MAX_STEP_COUNT => {
+                Err(ControlError::StepCount { count: *count })
+            }
+            ControlCommand::LoadScene { scene } => check_scene_ref(scene),
+            _ => Ok(()),
+        }
+    }
+
+    /// Clears `buf` and writes the frame. On error `buf` is left empty.
+    pub fn encode(&self, buf: &mut Vec<u8>) -> Result<(), ControlError> {
+        buf.clear();
+        self.validate()?;
+        json::encode(buf, Kind::ControlRequest, self).map_err(|len| ControlError::TooLarge { len })
+    }
+
+    /// Decodes and validates a request frame.
+    pub fn decode(bytes: &[u8]) -> Result<ControlRequest, DecodeError<ControlError>> {
+        let r: raw::Request = json::decode(bytes, Kind::ControlRequest)?;
+        let command = match r.command {
+            raw::Command::Pause {} => ControlCommand::Pause,
+            raw::Command::Resume {} => ControlCommand::Resume,
+            raw::Command::Step { count } => ControlCommand::Step { count },
+            raw::Command::Reset {} => ControlCommand::Reset,
+            raw::Command::SetVariant { variant: v } => {
+                ControlCommand::SetVariant { variant: variant(v).map_err(DecodeError::Invalid)? }
+            }
+            raw::Command::LoadScene { scene } => ControlCommand::LoadScene { scene },
+        };
+        let req = ControlRequest { id: r.id, command };
+        req.validate().map_err(DecodeError::Invalid)?;
+        Ok(req)
+    }
+}
+
+impl ControlReply {
+    /// A success reply.
+    pub fn ok(id: u64, status: ServerStatus) -> ControlReply {
+        ControlReply { id, outcome: ControlOutcome::Ok(status) }
+    }
+
+    /// A failure reply; `message` is cut to [`MAX_MESSAGE_LEN`] bytes at a character boundary.
+    pub fn error(id: u64, code: ControlErrorCode, message: impl Into<String>) -> ControlReply {
+        let mut message = message.into();
+        if message.len() > MAX_MESSAGE_LEN {
+            let mut end = MAX_MESSAGE_LEN;
+            while !message.is_char_boundary(end) {
+                end -= 1;
+            }
+            message.truncate(end);
+        }
+        ControlReply { id, outcome: ControlOutcome::Error(ControlFailure { code, message }) }
+    }
+
+    /// Checks every rule a decoder checks.
+    pub fn validate(&self) -> Result<(), ControlError> {
+        match &self.outcome {
+            ControlOutcome::Ok(s) => {
+                if !s.sim_time.is_finite() || s.sim_time < 0.0 {
+                    return Err(ControlError::SimTime { value: s.sim_time });
+                }
+                check_scene_ref(&s.scene)
+            }
+            ControlOutcome::Error(f) if f.message.len() > MAX_MESSAGE_LEN => {
+                Err(ControlError::MessageTooLong { len: f.message.len() })
+            }
+            ControlOutcome::Error(_) => Ok(()),
+        }
+    }
+
+    /// Clears `buf` and writes the frame. On error `buf` is left empty.
+    pub fn encode(&self, buf: &mut Vec<u8>) -> Result<(), ControlError> {
+        buf.clear();
+        self.validate()?;
+        json::encode(buf, Kind::ControlReply, self).map_err(|len| ControlError::TooLarge { len })
+    }
+
+    /// Decodes and validates a reply frame.
+    pub fn decode(bytes: &[u8]) -> Result<ControlReply, DecodeError<ControlError>> {
+        let r: raw::Reply = json::decode(bytes, Kind::ControlReply)?;
+        let outcome = match r.outcome {
+            raw::Outcome::Ok(s) => ControlOutcome::Ok(ServerStatus {
+                scene: s.scene,
+                paused: s.paused,
+                sequence: s.sequence,
+                sim_time: s.sim_time,
+                variant: variant(s.variant).map_err(DecodeError::Invalid)?,
+            }),
+            raw::Outcome::Error(f) => ControlOutcome::Error(f),
+        };
+        let reply = ControlReply { id: r.id, outcome };
+        reply.validate().map_err(DecodeError::Invalid)?;
+        Ok(reply)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::header::{self, FrameError};
+
+    fn frame(kind: Kind, json: &str) -> Vec<u8> {
+        let mut b = Vec::new();
+        header::begin(&mut b, kind);
+        b.extend_from_slice(json.as_bytes());
+        header::set_payload_len(&mut b);
+        b
+    }
+
+    #[test]
+    fn json_shape_is_the_documented_one() {
+        let mut buf = Vec::new();
+        let r = ControlRequest {
+            id: 11,
+            command: ControlCommand::SetVariant { variant: SolverVariant::Skyline },
+        };
+        r.encode(&mut buf).unwrap();
+        assert_eq!(&buf[16..], br#"{"id":11,"command":{"op":"set_variant","variant":"skyline"}}"#);
+        let r = ControlRequest { id: 7, command: ControlCommand::Pause };
+        r.encode(&mut buf).unwrap();
+        assert_eq!(&buf[16..], br#"{"id":7,"command":{"op":"pause"}}"#);
+        let e = ControlReply::error(11, ControlErrorCode::UnknownVariant, "no");
+        e.encode(&mut buf).unwrap();
+        assert_eq!(&buf[16..], br#"{"id":11,"outcome":{"error":{"code":"unknown_variant","message":"no"}}}"#);
+        assert_eq!(ControlReply::decode(&buf), Ok(e));
+    }
+
+    #[test]
+    fn unknown_variant_is_typed() {
+        let b = frame(Kind::ControlRequest, r#"{"id":1,"command":{"op":"set_variant","variant":"fast"}}"#);
+        assert_eq!(
+            ControlRequest::decode(&b),
+            Err(DecodeError::Invalid(ControlError::UnknownVariant { name: "fast".into() }))
+        );
+    }
+
+    #[test]
+    fn unknown_fields_and_ops_are_json_errors() {
+        for j in [
+            r#"{"id":1,"command":{"op":"pause","x":1}}"#,
+            r#"{"id":1,"command":{"op":"explode"}}"#,
+            r#"{"id":1,"command":{"op":"pause"},"extra":true}"#,
+            r#"{"id":-1,"command":{"op":"pause"}}"#,
+        ] {
+            let r = ControlRequest::decode(&frame(Kind::ControlRequest, j));
+            assert!(matches!(r, Err(DecodeError::Frame(FrameError::Json { .. }))), "{j}: {r:?}");
+        }
+    }
+
+    #[test]
+    fn long_messages_are_cut_at_a_char_boundary() {
+        let r = ControlReply::error(1, ControlErrorCode::Internal, "é".repeat(600));
+        let ControlOutcome::Error(f) = &r.outcome else { unreachable!() };
+        assert_eq!(f.message.len(), 1024);
+        assert_eq!(r.validate(), Ok(()));
+    }
+}

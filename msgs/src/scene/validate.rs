@@ -1,0 +1,393 @@
+//! Validation of a scene description: bounds, finiteness, unit quaternions, unique names and ids,
+//! and references between bodies, joints, actuators and joystick bindings.
+//!
+//! Errors name the offending element by a JSON-like path (`bodies[3].colliders[0].shape.radius`).
+
+use std::collections::HashSet;
+
+use super::types::*;
+use crate::control::{ControlError, check_scene_ref};
+use crate::input::{MAX_AXES, MAX_BUTTONS};
+use crate::keys::{KeyError, WorldName};
+use crate::name::{NameError, validate_actuator_name};
+use crate::pose::QUAT_NORM_TOLERANCE;
+
+/// What is wrong with the content of a scene description.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum SceneError {
+    /// Invalid world name.
+    #[error("world: {0}")]
+    World(#[from] KeyError),
+    /// Invalid scene name or path.
+    #[error("scene: {0}")]
+    Scene(ControlError),
+    /// NaN or ±Inf.
+    #[error("{path}: non-finite value")]
+    NonFinite {
+        /// Where.
+        path: String,
+    },
+    /// A length, mass or step size that must be > 0 (or ≥ 0) is not.
+    #[error("{path}: {value} is out of range (must be positive)")]
+    NonPositive {
+        /// Where.
+        path: String,
+        /// The value.
+        value: f64,
+    },
+    /// `| ‖q‖ − 1 |` above the tolerance.
+    #[error("{path}: quaternion norm {norm} is not 1")]
+    NonUnitQuaternion {
+        /// Where.
+        path: String,
+        /// `‖q‖`.
+        norm: f64,
+    },
+    /// Too many entries in a list.
+    #[error("{path}: {count} entries (at most {max})")]
+    TooMany {
+        /// Which list.
+        path: String,
+        /// Entries.
+        count: usize,
+        /// Bound.
+        max: usize,
+    },
+    /// Too few entries in a list (convex hull, triangle mesh).
+    #[error("{path}: {count} entries (at least {min})")]
+    TooFew {
+        /// Which list.
+        path: String,
+        /// Entries.
+        count: usize,
+        /// Bound.
+        min: usize,
+    },
+    /// Empty body or joint name, or empty reference.
+    #[error("{path}: empty name")]
+    EmptyName {
+        /// Where.
+        path: String,
+    },
+    /// Name or reference above its bound.
+    #[error("{path}: {len} bytes (at most {max})")]
+    NameTooLong {
+        /// Where.
+        path: String,
+        /// Length in bytes.
+        len: usize,
+        /// Bound.
+        max: usize,
+    },
+    /// A control character in a name or reference.
+    #[error("{path}: control character at byte {index}")]
+    NameChar {
+        /// Where.
+        path: String,
+        /// Byte offset.
+        index: usize,
+    },
+    /// An actuator name that breaks the actuator name rules.
+    #[error("{path}: {source}")]
+    ActuatorName {
+        /// Where.
+        path: String,
+        /// What is wrong.
+        source: NameError,
+    },
+    /// Two bodies with one id.
+    #[error("body id {id} appears twice")]
+    DuplicateBodyId {
+        /// The id.
+        id: u32,
+    },
+    /// Two bodies, joints or actuators with one name.
+    #[error("{path}: name {name:?} appears twice")]
+    DuplicateName {
+        /// Where (the second one).
+        path: String,
+        /// The name.
+        name: String,
+    },
+    /// A joint naming a body id that is not in `bodies`.
+    #[error("{path}: no body with id {id}")]
+    UnknownBody {
+        /// Where.
+        path: String,
+        /// The id.
+        id: u32,
+    },
+    /// A joint whose parent is its child.
+    #[error("{path}: parent and child are the same body")]
+    SelfJoint {
+        /// Where.
+        path: String,
+    },
+    /// An actuator naming a joint that is not in `joints`.
+    #[error("{path}: no joint named {name:?}")]
+    UnknownJoint {
+        /// Where.
+        path: String,
+        /// The name.
+        name: String,
+    },
+    /// A binding naming an actuator that is not in `actuators`.
+    #[error("{path}: no actuator named {name:?}")]
+    UnknownActuator {
+        /// Where.
+        path: String,
+        /// The name.
+        name: String,
+    },
+    /// A binding to axis ≥ 32 or button ≥ 64.
+    #[error("{path}: index {index} (must be below {max})")]
+    BindingIndex {
+        /// Where.
+        path: String,
+        /// The index.
+        index: u8,
+        /// Bound.
+        max: usize,
+    },
+    /// Heightfield dimensions outside 2..=4096, or inline samples ≠ rows · cols.
+    #[error("{path}: {rows} × {cols} heightfield with {samples:?} samples")]
+    HeightfieldSize {
+        /// Where.
+        path: String,
+        /// Rows.
+        rows: u32,
+        /// Columns.
+        cols: u32,
+        /// Inline samples, if inline.
+        samples: Option<usize>,
+    },
+    /// A triangle index beyond the vertex list.
+    #[error("{path}: vertex index {index} (mesh has {vertices} vertices)")]
+    MeshIndex {
+        /// Where.
+        path: String,
+        /// The index.
+        index: u32,
+        /// Vertices.
+        vertices: usize,
+    },
+    /// Actuator limits with `lo > hi`.
+    #[error("{path}: limits [{lo}, {hi}] are reversed")]
+    Limits {
+        /// Where.
+        path: String,
+        /// Lower limit.
+        lo: f64,
+        /// Upper limit.
+        hi: f64,
+    },
+    /// The encoded payload exceeds the 16 MiB frame (encode only).
+    #[error("encoded scene of {len} bytes exceeds the maximum frame")]
+    TooLarge {
+        /// Payload length.
+        len: usize,
+    },
+}
+
+fn finite(path: impl FnOnce() -> String, x: &[f64]) -> Result<(), SceneError> {
+    if x.iter().all(|v| v.is_finite()) { Ok(()) } else { Err(SceneError::NonFinite { path: path() }) }
+}
+
+fn positive(path: impl FnOnce() -> String, v: f64) -> Result<(), SceneError> {
+    if !v.is_finite() {
+        return Err(SceneError::NonFinite { path: path() });
+    }
+    if v > 0.0 { Ok(()) } else { Err(SceneError::NonPositive { path: path(), value: v }) }
+}
+
+fn at_most(path: impl FnOnce() -> String, count: usize, max: usize) -> Result<(), SceneError> {
+    if count <= max { Ok(()) } else { Err(SceneError::TooMany { path: path(), count, max }) }
+}
+
+fn text(path: impl FnOnce() -> String, s: &str, max: usize) -> Result<(), SceneError> {
+    if s.is_empty() {
+        return Err(SceneError::EmptyName { path: path() });
+    }
+    if s.len() > max {
+        return Err(SceneError::NameTooLong { path: path(), len: s.len(), max });
+    }
+    match s.char_indices().find(|(_, c)| c.is_control()) {
+        Some((index, _)) => Err(SceneError::NameChar { path: path(), index }),
+        None => Ok(()),
+    }
+}
+
+fn pose(path: &str, position: &[f64; 3], q: &[f64; 4]) -> Result<(), SceneError> {
+    finite(|| format!("{path}.position"), position)?;
+    finite(|| format!("{path}.orientation"), q)?;
+    let norm = q.iter().map(|v| v * v).sum::<f64>().sqrt();
+    if (norm - 1.0).abs() > QUAT_NORM_TOLERANCE {
+        return Err(SceneError::NonUnitQuaternion { path: format!("{path}.orientation"), norm });
+    }
+    Ok(())
+}
+
+fn points(path: &str, v: &[[f64; 3]]) -> Result<(), SceneError> {
+    match v.iter().position(|p| !p.iter().all(|x| x.is_finite())) {
+        Some(i) => Err(SceneError::NonFinite { path: format!("{path}[{i}]") }),
+        None => Ok(()),
+    }
+}
+
+fn shape(p: &str, s: &Shape) -> Result<(), SceneError> {
+    match s {
+        Shape::Ball { radius } => positive(|| format!("{p}.radius"), *radius),
+        Shape::Box { half_extents } => half_extents
+            .iter()
+            .enumerate()
+            .try_for_each(|(i, &h)| positive(|| format!("{p}.half_extents[{i}]"), h)),
+        Shape::Capsule { radius, half_height } | Shape::Cylinder { radius, half_height } => {
+            positive(|| format!("{p}.radius"), *radius)?;
+            positive(|| format!("{p}.half_height"), *half_height)
+        }
+        Shape::ConvexHull { vertices } => {
+            let path = || format!("{p}.vertices");
+            at_most(path, vertices.len(), MAX_HULL_VERTICES)?;
+            if vertices.len() < 4 {
+                return Err(SceneError::TooFew { path: path(), count: vertices.len(), min: 4 });
+            }
+            points(&path(), vertices)
+        }
+        Shape::Heightfield { rows, cols, extent, heights } => {
+            let (r, c) = (*rows, *cols);
+            let dims_ok = (2..=MAX_HEIGHTFIELD_DIM).contains(&r) && (2..=MAX_HEIGHTFIELD_DIM).contains(&c);
+            let samples = match heights {
+                HeightData::Inline(h) => Some(h.len()),
+                HeightData::Reference(_) => None,
+            };
+            let count_ok =
+                samples.is_none_or(|n| n == r as usize * c as usize && n <= MAX_HEIGHTFIELD_SAMPLES);
+            if !dims_ok || !count_ok {
+                return Err(SceneError::HeightfieldSize { path: p.to_owned(), rows: r, cols: c, samples });
+            }
+            extent.iter().enumerate().try_for_each(|(i, &e)| positive(|| format!("{p}.extent[{i}]"), e))?;
+            match heights {
+                HeightData::Inline(h) => finite(|| format!("{p}.heights"), h),
+                HeightData::Reference(u) => text(|| format!("{p}.heights.reference"), u, MAX_REFERENCE_LEN),
+            }
+        }
+        Shape::Trimesh { mesh: MeshData::Reference(u) } => {
+            text(|| format!("{p}.mesh.reference"), u, MAX_REFERENCE_LEN)
+        }
+        Shape::Trimesh { mesh: MeshData::Inline { vertices, triangles } } => {
+            at_most(|| format!("{p}.mesh.vertices"), vertices.len(), MAX_MESH_VERTICES)?;
+            at_most(|| format!("{p}.mesh.triangles"), triangles.len(), MAX_MESH_TRIANGLES)?;
+            if triangles.is_empty() {
+                return Err(SceneError::TooFew { path: format!("{p}.mesh.triangles"), count: 0, min: 1 });
+            }
+            points(&format!("{p}.mesh.vertices"), vertices)?;
+            for (t, tri) in triangles.iter().enumerate() {
+                if let Some(&index) = tri.iter().find(|&&i| i as usize >= vertices.len()) {
+                    let path = format!("{p}.mesh.triangles[{t}]");
+                    return Err(SceneError::MeshIndex { path, index, vertices: vertices.len() });
+                }
+            }
+            Ok(())
+        }
+    }
+}
+
+fn unique<'a>(
+    seen: &mut HashSet<&'a str>,
+    name: &'a str,
+    path: impl FnOnce() -> String,
+) -> Result<(), SceneError> {
+    if seen.insert(name) {
+        Ok(())
+    } else {
+        Err(SceneError::DuplicateName { path: path(), name: name.to_owned() })
+    }
+}
+
+impl SceneDescription {
+    /// Checks every rule a decoder checks.
+    pub fn validate(&self) -> Result<(), SceneError> {
+        WorldName::new(self.world.as_str())?;
+        check_scene_ref(&self.scene).map_err(SceneError::Scene)?;
+        positive(|| "timestep".into(), self.timestep)?;
+        finite(|| "gravity".into(), &self.gravity)?;
+        at_most(|| "bodies".into(), self.bodies.len(), MAX_SCENE_BODIES)?;
+        at_most(|| "joints".into(), self.joints.len(), MAX_SCENE_JOINTS)?;
+        at_most(|| "actuators".into(), self.actuators.len(), MAX_SCENE_ACTUATORS)?;
+        at_most(|| "joystick".into(), self.joystick.len(), MAX_BINDINGS)?;
+
+        let mut ids = HashSet::with_capacity(self.bodies.len());
+        let mut names = HashSet::with_capacity(self.bodies.len());
+        for (i, b) in self.bodies.iter().enumerate() {
+            let p = format!("bodies[{i}]");
+            if !ids.insert(b.id) {
+                return Err(SceneError::DuplicateBodyId { id: b.id });
+            }
+            text(|| format!("{p}.name"), &b.name, MAX_NAME_LEN)?;
+            unique(&mut names, &b.name, || format!("{p}.name"))?;
+            if !b.mass.is_finite() {
+                return Err(SceneError::NonFinite { path: format!("{p}.mass") });
+            }
+            if b.mass < 0.0 || (b.kind == BodyKind::Dynamic && b.mass <= 0.0) {
+                return Err(SceneError::NonPositive { path: format!("{p}.mass"), value: b.mass });
+            }
+            at_most(|| format!("{p}.colliders"), b.colliders.len(), MAX_COLLIDERS_PER_BODY)?;
+            for (j, c) in b.colliders.iter().enumerate() {
+                let cp = format!("{p}.colliders[{j}]");
+                pose(&cp, &c.position, &c.orientation)?;
+                shape(&format!("{cp}.shape"), &c.shape)?;
+            }
+        }
+
+        let mut joints = HashSet::with_capacity(self.joints.len());
+        for (i, j) in self.joints.iter().enumerate() {
+            let p = format!("joints[{i}]");
+            text(|| format!("{p}.name"), &j.name, MAX_NAME_LEN)?;
+            unique(&mut joints, &j.name, || format!("{p}.name"))?;
+            for (field, id) in [("parent", j.parent), ("child", Some(j.child))] {
+                if let Some(id) = id.filter(|id| !ids.contains(id)) {
+                    return Err(SceneError::UnknownBody { path: format!("{p}.{field}"), id });
+                }
+            }
+            if j.parent == Some(j.child) {
+                return Err(SceneError::SelfJoint { path: p });
+            }
+        }
+
+        let mut actuators = HashSet::with_capacity(self.actuators.len());
+        for (i, a) in self.actuators.iter().enumerate() {
+            let p = format!("actuators[{i}]");
+            validate_actuator_name(&a.name)
+                .map_err(|source| SceneError::ActuatorName { path: format!("{p}.name"), source })?;
+            unique(&mut actuators, &a.name, || format!("{p}.name"))?;
+            if let Some(joint) = a.joint.as_deref().filter(|j| !joints.contains(j)) {
+                return Err(SceneError::UnknownJoint { path: format!("{p}.joint"), name: joint.to_owned() });
+            }
+            if let Some([lo, hi]) = a.limits {
+                finite(|| format!("{p}.limits"), &[lo, hi])?;
+                if lo > hi {
+                    return Err(SceneError::Limits { path: format!("{p}.limits"), lo, hi });
+                }
+            }
+        }
+
+        for (i, b) in self.joystick.iter().enumerate() {
+            let p = format!("joystick[{i}]");
+            let (index, max) = match b.input {
+                JoystickInput::Axis(a) => (a, MAX_AXES),
+                JoystickInput::Button(k) => (k, MAX_BUTTONS),
+            };
+            if index as usize >= max {
+                return Err(SceneError::BindingIndex { path: format!("{p}.input"), index, max });
+            }
+            if !actuators.contains(b.actuator.as_str()) {
+                return Err(SceneError::UnknownActuator {
+                    path: format!("{p}.actuator"),
+                    name: b.actuator.clone(),
+                });
+            }
+            finite(|| format!("{p}.scale"), &[b.scale])?;
+        }
+        Ok(())
+    }
+}

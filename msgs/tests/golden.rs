@@ -1,0 +1,143 @@
+//! The byte dumps and JSON examples of `msgs/README.md` are what the code encodes and decodes, so
+//! the documentation and the implementation cannot drift apart.
+
+mod common;
+
+use common::*;
+use pivotsim_msgs::*;
+
+const README: &str = include_str!("../README.md");
+
+/// Lines of the fenced block that follows `marker` (the marker line, then a ``` fence).
+fn block_after(marker: &str) -> Vec<&'static str> {
+    let start = README.find(marker).unwrap_or_else(|| panic!("README has no {marker}"));
+    let mut lines = README[start..].lines().skip(1);
+    assert!(lines.next().is_some_and(|l| l.starts_with("```")), "{marker} is not followed by a fence");
+    lines.take_while(|l| !l.starts_with("```")).collect()
+}
+
+/// Parses `OFFSET | hex bytes | comment` lines; checks that offsets are contiguous.
+fn hex_dump(marker: &str) -> Vec<u8> {
+    let mut bytes = Vec::new();
+    for line in block_after(marker) {
+        let mut cols = line.split('|');
+        let offset = usize::from_str_radix(cols.next().unwrap().trim(), 16).unwrap();
+        assert_eq!(offset, bytes.len(), "offset column of {line:?}");
+        for h in cols.next().unwrap().split_whitespace() {
+            bytes.push(u8::from_str_radix(h, 16).unwrap_or_else(|_| panic!("bad hex {h:?} in {line:?}")));
+        }
+    }
+    bytes
+}
+
+fn dump(b: &[u8]) -> String {
+    b.chunks(8)
+        .enumerate()
+        .map(|(i, c)| {
+            format!("{:04x} | {}", 8 * i, c.iter().map(|x| format!("{x:02x}")).collect::<Vec<_>>().join(" "))
+        })
+        .collect::<Vec<_>>()
+        .join("\n")
+}
+
+#[test]
+fn golden_pose_frame() {
+    let want = hex_dump("<!-- golden:pose-frame -->");
+    let mut got = Vec::new();
+    sample_pose().encode(&mut got).unwrap();
+    assert_eq!(got, want, "encoded:\n{}", dump(&got));
+    assert_eq!(want.len(), 160);
+    assert_eq!(PoseFrame::decode(&want).unwrap(), sample_pose());
+    let view = PoseFrameView::parse(&want).unwrap();
+    assert_eq!(view.bodies().collect::<Vec<_>>(), [sample_body(7)]);
+}
+
+#[test]
+fn golden_winch_command() {
+    let want = hex_dump("<!-- golden:winch -->");
+    let cmd = InputCommand::Winch(WinchCommand {
+        sequence: 42,
+        source_id: 3,
+        actuator: name("winch"),
+        drum_speed: -0.5,
+    });
+    let mut got = Vec::new();
+    cmd.encode(&mut got).unwrap();
+    assert_eq!(got, want, "encoded:\n{}", dump(&got));
+    assert_eq!(InputCommand::decode(&want).unwrap(), cmd);
+}
+
+fn json_frame(kind: Kind, json: &str) -> Vec<u8> {
+    let mut b = Vec::new();
+    b.extend_from_slice(&MAGIC);
+    b.extend_from_slice(&FORMAT_VERSION.to_le_bytes());
+    b.extend_from_slice(&kind.code().to_le_bytes());
+    b.extend_from_slice(&(json.len() as u32).to_le_bytes());
+    b.extend_from_slice(&0u32.to_le_bytes());
+    b.extend_from_slice(json.as_bytes());
+    b
+}
+
+#[test]
+fn readme_control_examples_decode_and_encode_identically() {
+    let requests = block_after("<!-- example:control-request -->");
+    assert_eq!(requests.len(), 6);
+    let mut buf = Vec::new();
+    for line in requests {
+        let r = ControlRequest::decode(&json_frame(Kind::ControlRequest, line))
+            .unwrap_or_else(|e| panic!("{line}: {e}"));
+        r.encode(&mut buf).unwrap();
+        assert_eq!(&buf[HEADER_LEN..], line.as_bytes(), "compact encoding of {line}");
+    }
+    for line in block_after("<!-- example:control-reply -->") {
+        let r = ControlReply::decode(&json_frame(Kind::ControlReply, line))
+            .unwrap_or_else(|e| panic!("{line}: {e}"));
+        r.encode(&mut buf).unwrap();
+        assert_eq!(&buf[HEADER_LEN..], line.as_bytes(), "compact encoding of {line}");
+    }
+}
+
+#[test]
+fn readme_scene_example_decodes() {
+    let json = block_after("<!-- example:scene -->").join("\n");
+    let s = SceneDescription::decode(&json_frame(Kind::SceneDescription, &json)).unwrap();
+    assert_eq!(s.world, "demo");
+    assert_eq!(s.bodies.len(), 5);
+    assert_eq!(s.joints[0].parent, None);
+    assert_eq!(s.actuator("winch").map(|a| a.kind), Some(ActuatorKind::Winch));
+    let kinds: Vec<&str> = s
+        .bodies
+        .iter()
+        .flat_map(|b| &b.colliders)
+        .map(|c| match c.shape {
+            Shape::Ball { .. } => "ball",
+            Shape::Box { .. } => "box",
+            Shape::Capsule { .. } => "capsule",
+            Shape::Cylinder { .. } => "cylinder",
+            Shape::ConvexHull { .. } => "convex_hull",
+            Shape::Heightfield { .. } => "heightfield",
+            Shape::Trimesh { .. } => "trimesh",
+        })
+        .collect();
+    assert_eq!(kinds, ["box", "heightfield", "cylinder", "capsule", "convex_hull", "ball", "trimesh"]);
+    // Nullable fields may be omitted.
+    let omitted = json.replace(r#", "limits": null"#, "");
+    assert_ne!(omitted, json);
+    assert_eq!(SceneDescription::decode(&json_frame(Kind::SceneDescription, &omitted)).unwrap(), s);
+}
+
+#[test]
+fn readme_sizes_match_the_constants() {
+    let row = |kind: &str| README.lines().find(|l| l.starts_with(&format!("| `{kind}`"))).unwrap();
+    let max =
+        |kind: &str| row(kind).rsplit('|').nth(2).unwrap().trim().replace(' ', "").parse::<usize>().unwrap();
+    for k in Kind::ALL {
+        assert_eq!(max(&format!("0x{:04x}", k.code())), k.max_payload_len(), "{k}");
+    }
+    assert_eq!(HEADER_LEN + POSE_FIXED_LEN, 48);
+    assert_eq!(HEADER_LEN + STATS_FIXED_LEN, 168);
+    assert_eq!(HEADER_LEN + BOOM_FIXED_LEN, 32);
+    assert_eq!(HEADER_LEN + JOYSTICK_LEN, 168);
+    assert_eq!(HEADER_LEN + WINCH_LEN, 72);
+    assert_eq!(HEADER_LEN + ACTUATOR_LEN, 72);
+}
