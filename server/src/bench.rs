@@ -806,6 +806,7 @@ struct VariantResult {
     long_skipped: Option<String>,
     deletion_error: Option<f64>,
     deletion_error_abs: Option<f64>,
+    deletion_backward_error: Option<f64>,
     deletion_error_skipped: Option<String>,
     /// Regularized pivots in the deletion-error run (a semidefinite `A`; the error is then large).
     deletion_run_regularized: usize,
@@ -911,6 +912,7 @@ fn run_problem(
             long_skipped,
             deletion_error: None,
             deletion_error_abs: None,
+            deletion_backward_error: None,
             deletion_error_skipped: None,
             deletion_run_regularized: 0,
         });
@@ -936,6 +938,7 @@ fn run_problem(
         let st = solver.solve(p, &mut lambda);
         variants[k].deletion_error = st.deletion_error;
         variants[k].deletion_error_abs = st.deletion_error_abs;
+        variants[k].deletion_backward_error = st.deletion_backward_error;
         variants[k].deletion_run_regularized = st.regularized;
     }
     ProblemResult {
@@ -992,6 +995,8 @@ pub struct Summary {
     /// Worst relative and absolute deletion errors over the runs without regularized pivots
     /// (positive definite `A`, the setting of paper Table 4).
     pub worst_deletion_error_spd: Option<(f64, f64, String)>,
+    /// Largest backward error `‖L Lᵀ − A_FF‖_F / ‖A_FF‖_F` of a deleted envelope factor, and where.
+    pub worst_deletion_backward_error: Option<(f64, String)>,
     /// Envelope kernel crossover (tight count) on the generated contact-like matrix.
     pub envelope_crossover_tight: Option<f64>,
     /// Dense kernel crossover (% tight) on the random dense SPD matrix of the kernel size.
@@ -1032,8 +1037,14 @@ fn summarize(plan: &Plan, problems: &[ProblemResult], env: &[EnvelopeKernel], dk
     let mut worst_rel: Option<(f64, String)> = None;
     let mut worst_abs: Option<(f64, String)> = None;
     let mut worst_spd: Option<(f64, f64, String)> = None;
+    let mut worst_back: Option<(f64, String)> = None;
     for p in problems {
         for r in &p.variants {
+            if let Some(e) =
+                r.deletion_backward_error.filter(|e| worst_back.as_ref().is_none_or(|w| *e > w.0))
+            {
+                worst_back = Some((e, format!("{} [{}]", p.name, r.variant)));
+            }
             if let (Some(e), Some(a), 0) =
                 (r.deletion_error, r.deletion_error_abs, r.deletion_run_regularized)
             {
@@ -1064,6 +1075,7 @@ fn summarize(plan: &Plan, problems: &[ProblemResult], env: &[EnvelopeKernel], dk
         worst_deletion_error_rel: worst_rel,
         worst_deletion_error_abs: worst_abs,
         worst_deletion_error_spd: worst_spd,
+        worst_deletion_backward_error: worst_back,
         envelope_crossover_tight: env.first().and_then(|e| e.crossover_tight.value),
         dense_crossover_pct: dk
             .iter()
@@ -1114,6 +1126,9 @@ fn summary_text(s: &Summary) -> String {
         _ => {
             let _ = writeln!(t, "  worst deletion error: — (not measured)");
         }
+    }
+    if let Some((b, at)) = &s.worst_deletion_backward_error {
+        let _ = writeln!(t, "  worst deletion backward error ‖LLᵀ − A_FF‖/‖A_FF‖: {b:.2e} ({at})");
     }
     if let Some((r, a, at)) = &s.worst_deletion_error_spd {
         let _ = writeln!(
@@ -1313,7 +1328,7 @@ fn markdown(r: &Report<'_>) -> String {
         );
         let _ = writeln!(
             w,
-            "| variant | status@35 | steps | tight | time ms @35 | µs/step | residual_rel | converged@1000 | deletion error rel / abs | auto choices |"
+            "| variant | status@35 | steps | tight | time ms @35 | µs/step | residual_rel | converged@1000 | deletion error rel / abs / backward | auto choices |"
         );
         let _ = writeln!(w, "|---|---|---|---|---|---|---|---|---|---|");
         for r in &p.variants {
@@ -1328,7 +1343,10 @@ fn markdown(r: &Report<'_>) -> String {
                 (Some(a), Some(b), _) if r.deletion_run_regularized > 0 => {
                     format!("{a:.1e} / {b:.1e} ({} regularized)", r.deletion_run_regularized)
                 }
-                (Some(a), Some(b), _) => format!("{a:.1e} / {b:.1e}"),
+                (Some(a), Some(b), _) => match r.deletion_backward_error {
+                    Some(c) => format!("{a:.1e} / {b:.1e} / {c:.1e}"),
+                    None => format!("{a:.1e} / {b:.1e}"),
+                },
                 (_, _, Some(why)) => format!("skipped ({why})"),
                 _ => "—".into(),
             };

@@ -182,6 +182,7 @@ fn solve(
             "regularized": st.regularized,
             "deletion_error": st.deletion_error,
             "deletion_error_abs": st.deletion_error_abs,
+            "deletion_backward_error": st.deletion_backward_error,
         });
         println!("{v}");
     } else {

@@ -131,6 +131,10 @@ fn deletion_error_is_small() {
         if st.deletions > 0 {
             let e = st.deletion_error.expect("measured");
             assert!(e <= 1e-11, "{v}: relative deletion error {e}");
+            if v != Variant::Downdate {
+                let b = st.deletion_backward_error.expect("measured on the envelope");
+                assert!(b <= 1e-14, "{v}: backward error {b}");
+            }
         }
     }
 }

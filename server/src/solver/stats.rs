@@ -100,6 +100,9 @@ pub struct SolveStats {
     pub deletion_error: Option<f64>,
     /// Same, absolute Frobenius norm (the paper's Table 4 unit).
     pub deletion_error_abs: Option<f64>,
+    /// Backward error `max ‖L Lᵀ − A_FF‖_F / ‖A_FF‖_F` of the deleted factors (envelope variants),
+    /// when requested: the stability of the deletions, independent of the conditioning.
+    pub deletion_backward_error: Option<f64>,
     /// Time spent ordering, µs.
     pub ordering_us: f64,
     /// Time spent factoring (initial factor and refactors), µs.

@@ -273,6 +273,9 @@ impl Solver {
                 .sum::<f64>();
             (abs, norm.sqrt())
         } else {
+            let back = self.env.backward_error(&self.ap, &self.tight, &self.l);
+            let cur = self.stats.deletion_backward_error.unwrap_or(0.0);
+            self.stats.deletion_backward_error = Some(cur.max(back));
             self.env.factor_from(&self.ap, &self.tight, &mut self.lref, 0, self.max_diag);
             (self.env.frobenius_diff(&self.l, &self.lref), self.env.frobenius(&self.lref))
         };
