@@ -1,13 +1,18 @@
 //! The step's hot loop reuses its buffers: after the first steps of a scene have sized them, a step
 //! allocates nothing — the island problem is refilled in place (`Mlcp::assign`) and the solver's
-//! workspace is reused. A counting global allocator watches.
+//! workspace is reused. A counting global allocator watches, over chains of hinges and ball joints
+//! (with and without projection) and over a machine scene with every other row kind and element:
+//! cylindrical and universal joints, position motors on both free axes, a gear, a differential and a
+//! slipping clutch (rows on three and four bodies), a spring–damper row, a buoyant float with waves
+//! (the implicit 6 × 6 solve) and a cable from the chain helper.
 
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::sync::atomic::{AtomicUsize, Ordering};
 
 use nalgebra::Vector3;
 use pivotsim_server::dynamics::{
-    BodyBuilder, JointBuilder, JointLimit, JointMotor, World, WorldSettings, sphere_inertia,
+    BodyBuilder, Buoyancy, ChainBuilder, ChainEnd, CouplingBuilder, ForceElement, FreeAxis, JointBuilder,
+    JointLimit, JointMotor, SpringDamper, Water, Wave, World, WorldSettings, box_inertia, sphere_inertia,
 };
 
 struct Counting;
@@ -55,7 +60,7 @@ fn scene(chains: usize, links: usize, projection: usize) -> World {
             let j = if i == 0 {
                 JointBuilder::hinge(&format!("c{c}j{i}"), b, Some(ceiling), anchor, Vector3::y())
                     .limit(JointLimit::new(-0.5, 0.5))
-                    .motor(JointMotor { target_speed: 0.2, max_force: 3.0 })
+                    .motor(JointMotor::velocity(0.2, 3.0))
             } else {
                 JointBuilder::ball(&format!("c{c}j{i}"), b, prev, anchor)
             };
@@ -63,6 +68,109 @@ fn scene(chains: usize, links: usize, projection: usize) -> World {
             prev = Some(b);
         }
     }
+    w
+}
+
+/// A machine with every other row kind: a boom on a cylindrical piston with position motors, a
+/// drive shaft through a universal joint, a gearbox (gear, differential, clutch) on a chassis, a
+/// sprung float in waves and a crane cable.
+fn machine(projection: usize) -> World {
+    let mut w =
+        World::new(WorldSettings { projection_iterations: projection, ..Default::default() }).unwrap();
+    let body = |w: &mut World, name: &str, m: f64, at: Vector3<f64>| {
+        w.add_body(BodyBuilder::dynamic(name, m, box_inertia(m, Vector3::new(0.3, 0.2, 0.1))).position(at))
+            .unwrap()
+    };
+    let chassis = body(&mut w, "chassis", 50.0, Vector3::new(0.0, 0.0, 1.0));
+    w.add_joint(JointBuilder::prismatic("track", chassis, None, Vector3::new(0.0, 0.0, 1.0), Vector3::x()))
+        .unwrap();
+    let piston = body(&mut w, "piston", 5.0, Vector3::new(0.0, 0.0, 2.0));
+    w.add_joint(
+        JointBuilder::cylindrical(
+            "cylinder",
+            piston,
+            Some(chassis),
+            Vector3::new(0.0, 0.0, 2.0),
+            Vector3::z(),
+        )
+        .motor(JointMotor::position(0.3, 0.2, 500.0))
+        .axis_motor(FreeAxis::Angular, JointMotor::position(1.0, 0.5, 50.0).with_gain(0.5))
+        .axis_limit(FreeAxis::Angular, JointLimit::new(-2.0, 2.0)),
+    )
+    .unwrap();
+    let shaft = body(&mut w, "shaft", 2.0, Vector3::new(1.0, 0.0, 1.0));
+    w.add_joint(
+        JointBuilder::hinge("shaft-bearing", shaft, Some(chassis), Vector3::new(1.0, 0.0, 1.0), Vector3::x())
+            .motor(JointMotor::velocity(5.0, 20.0)),
+    )
+    .unwrap();
+    let prop = body(&mut w, "prop", 2.0, Vector3::new(2.0, 0.3, 1.0));
+    let u = Vector3::new(1.0, 0.3, 0.0).normalize();
+    w.add_joint(JointBuilder::hinge("prop-bearing", prop, Some(chassis), Vector3::new(2.0, 0.3, 1.0), u))
+        .unwrap();
+    w.add_joint(JointBuilder::universal(
+        "cardan",
+        shaft,
+        Some(prop),
+        Vector3::new(1.5, 0.0, 1.0),
+        Vector3::y(),
+        Vector3::z(),
+    ))
+    .unwrap();
+    let wheel = |w: &mut World, name: &str, y: f64| {
+        let b = body(w, name, 3.0, Vector3::new(0.0, y, 0.5));
+        w.add_joint(JointBuilder::hinge(
+            &format!("{name}-axle"),
+            b,
+            Some(chassis),
+            Vector3::new(0.0, y, 0.5),
+            Vector3::y(),
+        ))
+        .unwrap()
+    };
+    let (left, right) = (wheel(&mut w, "left", 1.0), wheel(&mut w, "right", -1.0));
+    let input = w.joint_id("shaft-bearing").unwrap();
+    w.add_coupling(CouplingBuilder::differential("diff", input, left, right, 3.0)).unwrap();
+    w.add_coupling(
+        CouplingBuilder::gear("clutch", input, w.joint_id("prop-bearing").unwrap(), 2.0).max_torque(1.0),
+    )
+    .unwrap();
+    let float = body(&mut w, "float", 100.0, Vector3::new(5.0, 0.0, 0.0));
+    let water = Water {
+        level: 0.0,
+        density: 1000.0,
+        wave: Some(Wave { amplitude: 0.2, angular_frequency: 0.8, phase: 0.0 }),
+    };
+    w.add_force(
+        "sea",
+        ForceElement::Buoyancy(
+            Buoyancy::box_grid(float, Vector3::new(0.3, 0.2, 0.1), 3, 2, water).with_drag(100.0, 10.0),
+        ),
+    )
+    .unwrap();
+    let mooring = SpringDamper {
+        body_a: float,
+        anchor_a: Vector3::zeros(),
+        body_b: Some(chassis),
+        anchor_b: Vector3::zeros(),
+        rest_length: 4.0,
+        stiffness: 500.0,
+        damping: 20.0,
+    };
+    w.add_force("mooring", ForceElement::SpringDamper(mooring)).unwrap();
+    w.add_chain(
+        ChainBuilder::new(
+            "cable",
+            Vector3::new(0.0, 0.0, 2.3),
+            Vector3::new(0.3, 0.0, -1.0).normalize(),
+            0.2,
+            0.5,
+            8,
+        )
+        .attach_start(ChainEnd::Body(piston))
+        .damping(0.5, 0.5),
+    )
+    .unwrap();
     w
 }
 
@@ -91,6 +199,14 @@ fn steps_allocate_nothing_once_warm() {
         println!(
             "{chains} chain(s) × {links} links, projection {proj}: {per_step} allocations per step, {solves} solves"
         );
+        per_solve.push(per_step / solves as f64);
+    }
+    for proj in [0, 1] {
+        let mut w = machine(proj);
+        let (per_step, solves) = allocations_per_step(&mut w);
+        let rows: usize = w.island_stats().iter().map(|s| s.rows).sum();
+        println!("machine, projection {proj}: {per_step} allocations per step, {solves} solves, {rows} rows");
+        assert!(w.bodies().iter().all(|b| b.position().iter().all(|c| c.is_finite())));
         per_solve.push(per_step / solves as f64);
     }
     assert!(per_solve.iter().all(|&p| p == 0.0), "{per_solve:?}");

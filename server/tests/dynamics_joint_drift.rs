@@ -6,11 +6,17 @@
 //! `|e₁ × f₁| · 1 m` (hinge) or the lateral offset of the anchor from the rail line plus the locked
 //! rotation angle times 1 m (prismatic).
 //!
-//! With the position projection (one iteration) the drift stays below 1e-6 m. The paper's formulation
-//! alone (`−φ/h` only) leaves at every step end the second-order error of integrating a rotation
-//! along its chord, `≈ (h ω)² r / 2` for an anchor at lever arm `r` from the centre of mass; the next
-//! step removes it, so it never accumulates: we assert that bound and that the error of the last 5 s
-//! is no larger than that of the first 5 s.
+//! **The requirement (drift below 1e-6 m over 20 s at `h = 1/60`) is asserted with the
+//! position projection explicitly enabled** (`projection_iterations = 1`): anchors hold to ~1e-8 m.
+//! It is not the default: the default is the paper's formulation alone (`−φ/h` only, one solve per
+//! step), which conserves energy and angular momentum far better and costs half as much (the
+//! trade is documented in `world.rs`; the 50-link heavy chain runs 141 µs/step without, 272 µs/step
+//! with projection, holding its length to 1e-11 m either way). Without projection the joint *axes*
+//! still hold to ~1e-9 (asserted), and the anchors keep at every step end the second-order error of
+//! integrating a rotation along its chord, `≈ (h ω)² r / 2` for an anchor at lever arm `r` from the
+//! centre of mass; the next step removes it, so it never accumulates: we assert that bound and that
+//! the error of the last 5 s is no larger than that of the first 5 s. The prismatic joint, whose body
+//! does not rotate, holds 1e-6 m in both modes.
 
 use nalgebra::{UnitQuaternion, Vector3};
 use pivotsim_server::dynamics::{

@@ -14,8 +14,8 @@
 
 use nalgebra::{UnitQuaternion, Vector3};
 use pivotsim_server::dynamics::{
-    BodyBuilder, DEFAULT_COMPLIANCE, JointBuilder, JointLimit, JointMotor, JointRow, World, WorldSettings,
-    box_inertia, cylinder_inertia,
+    BodyBuilder, DEFAULT_COMPLIANCE, FreeAxis, JointBuilder, JointLimit, JointMotor, JointRow, World,
+    WorldSettings, box_inertia, cylinder_inertia,
 };
 
 const G: f64 = 9.81;
@@ -46,7 +46,7 @@ fn upper_limit_stops_a_falling_bar_with_the_gravity_reaction() {
         max_angle = max_angle.max(w.joint_coordinate(j).unwrap());
     }
     let angle = w.joint_coordinate(j).unwrap();
-    let torque = w.joint_impulse(j, JointRow::UpperLimit) / h;
+    let torque = w.joint_impulse(j, JointRow::UpperLimit(FreeAxis::Angular)) / h;
     let expected = m * G * r * upper.cos();
     println!(
         "limit: rests at {angle:.9} rad (bound {upper}), overshoot {:.2e} rad, reaction {torque:.6} N m vs m g r cos θ = {expected:.6} N m",
@@ -56,7 +56,7 @@ fn upper_limit_stops_a_falling_bar_with_the_gravity_reaction() {
     assert!(max_angle - upper < 1e-3, "overshoot {}", max_angle - upper);
     assert!(w.joint_speed(j).unwrap().abs() < 1e-6);
     assert!((torque - expected).abs() < 1e-6 * expected, "{torque} vs {expected}");
-    assert_eq!(w.joint_impulse(j, JointRow::LowerLimit), 0.0);
+    assert_eq!(w.joint_impulse(j, JointRow::LowerLimit(FreeAxis::Angular)), 0.0);
 }
 
 #[test]
@@ -77,7 +77,7 @@ fn motor_reaches_its_target_speed_unloaded() {
     let j = w
         .add_joint(
             JointBuilder::hinge("axle", disc, None, Vector3::zeros(), Vector3::y())
-                .motor(JointMotor { target_speed: target, max_force: max_torque }),
+                .motor(JointMotor::velocity(target, max_torque)),
         )
         .unwrap();
     let accel = max_torque / inertia.z;
@@ -85,7 +85,7 @@ fn motor_reaches_its_target_speed_unloaded() {
     for n in 1..=60 {
         w.step().unwrap();
         let speed = w.joint_speed(j).unwrap();
-        let torque = w.joint_impulse(j, JointRow::Motor) / h;
+        let torque = w.joint_impulse(j, JointRow::Motor(FreeAxis::Angular)) / h;
         if n <= ramp_steps {
             // Saturated: the speed ramps at exactly τ_max / I.
             assert!((speed - accel * h * n as f64).abs() < 1e-9, "step {n}: {speed}");
@@ -108,14 +108,14 @@ fn motor_stalls_at_its_force_bound_under_a_heavy_load() {
         let j = w
             .add_joint(
                 JointBuilder::prismatic("rail", cart, None, Vector3::zeros(), Vector3::z())
-                    .motor(JointMotor { target_speed: 0.5, max_force }),
+                    .motor(JointMotor::velocity(0.5, max_force)),
             )
             .unwrap();
         for _ in 0..60 {
             w.step().unwrap();
         }
         let speed = w.joint_speed(j).unwrap();
-        let force = w.joint_impulse(j, JointRow::Motor) / h;
+        let force = w.joint_impulse(j, JointRow::Motor(FreeAxis::Linear)) / h;
         println!("motor bound {max_force} N: speed after 1 s {speed:.6} m/s, motor force {force:.6} N");
         if max_force < m * G {
             let a = (m * G - max_force) / m;

@@ -1,20 +1,22 @@
 //! Island MLCP assembly (paper eq. 2) directly from the per-body Jacobian blocks, and the velocity
 //! update `v⁺ = v_free + M⁻¹ Jᵀ λ`.
 //!
-//! For island rows `i, j` and a dynamic body `k` they both touch,
+//! For island rows `i, j` and a dynamic body `k` they both touch (a row has up to
+//! [`MAX_ROW_BODIES`] blocks, `rows.rs`),
 //!
 //! ```text
 //!   A_ij = Σ_k J_{i,k} M_k⁻¹ J_{j,k}ᵀ + δ_ij c_i / h²,     M_k⁻¹ = diag(m_k⁻¹ 𝟙₃, I_{w,k}⁻¹),
-//!   b_i  = r_i − Σ_{k ∈ {A_i, B_i}} J_{i,k} v_{free,k},
+//!   b_i  = r_i − Σ_{k ∈ blocks(i)} J_{i,k} v_{free,k},
 //! ```
 //!
-//! where the sum in `b` includes kinematic bodies (their scripted velocity) and the sum in `A` only
-//! dynamic ones (infinite mass contributes nothing). `W_{i,k} = M_k⁻¹ J_{i,k}ᵀ` is formed once per
-//! row and body; `A` is built row by row by walking, for each body of row `i`, the rows touching that
-//! body (a per-body row list), accumulating into a dense scratch indexed by row with a stamp array
-//! (rows sharing both bodies, e.g. the rows of one joint, meet twice and are summed). Only `j ≥ i` is
-//! computed and both `(i, j)` and `(j, i)` are emitted with the same value, so `A` is exactly
-//! symmetric. No `6n × 6n` matrix is ever formed; the cost is `Σ_k (rows at k)²`.
+//! where the sum in `b` runs over every block of row `i`, including kinematic bodies (their scripted
+//! velocity), and the sum in `A` only over dynamic ones (infinite mass contributes nothing).
+//! `W_{i,k} = M_k⁻¹ J_{i,k}ᵀ` is formed once per row and block; `A` is built row by row by walking,
+//! for each body of row `i`, the rows touching that body (a per-body list of (row, block) pairs),
+//! accumulating into a dense scratch indexed by row with a stamp array (rows sharing several bodies,
+//! e.g. the rows of one joint, meet once per shared body and are summed). Only `j ≥ i` is computed
+//! and both `(i, j)` and `(j, i)` are emitted with the same value, so `A` is exactly symmetric. No
+//! `6n × 6n` matrix is ever formed; the cost is `Σ_k (rows at k)²`.
 //!
 //! All buffers are reused across islands and steps, and the [`Mlcp`] is refilled in place
 //! ([`Mlcp::assign`]): once the buffers have grown, the assembly allocates nothing.
@@ -22,7 +24,7 @@
 use nalgebra::{Matrix3, Vector3};
 
 use super::island::Islands;
-use super::rows::{ConstraintRow, Jac6};
+use super::rows::{ConstraintRow, Jac6, MAX_ROW_BODIES};
 use crate::solver::{IndexState, Mlcp, MlcpError};
 
 /// What the assembly needs of each body (world-indexed).
@@ -62,12 +64,11 @@ impl BodyMotion {
 /// Reusable buffers of the island assembly.
 #[derive(Debug, Default)]
 pub(crate) struct Assembler {
-    /// `M⁻¹ J_Aᵀ`, `M⁻¹ J_Bᵀ` per island row (zero on a non-dynamic side).
-    w_a: Vec<Jac6>,
-    w_b: Vec<Jac6>,
-    /// Per island body: the (row, side B?) pairs touching it, CSR.
+    /// `M⁻¹ J_kᵀ` per island row and block (zero on a non-dynamic body).
+    w: Vec<[Jac6; MAX_ROW_BODIES]>,
+    /// Per island body: the (row, block) pairs touching it, CSR.
     body_rows_start: Vec<usize>,
-    body_rows: Vec<(usize, bool)>,
+    body_rows: Vec<(usize, usize)>,
     fill: Vec<usize>,
     acc: Vec<f64>,
     stamp: Vec<usize>,
@@ -80,11 +81,17 @@ pub(crate) struct Assembler {
     pub lo: Vec<f64>,
     pub hi: Vec<f64>,
     pub findex: Vec<Option<usize>>,
-    /// Warm start, filled by the caller before [`Assembler::mlcp`].
+    /// Warm start, filled by the caller before [`Assembler::fill_mlcp`].
     pub lambda0: Vec<f64>,
     pub index0: Vec<IndexState>,
     /// Solution of the island (island row order).
     pub lambda: Vec<f64>,
+}
+
+/// Island-local index of the dynamic body in block `s` of `r`, if any.
+#[inline]
+fn dyn_local(r: &ConstraintRow, s: usize, islands: &Islands, motion: &[BodyMotion]) -> Option<usize> {
+    r.bodies[s].filter(|&i| motion[i].dynamic).map(|i| islands.local_index(i).expect("body in an island"))
 }
 
 impl Assembler {
@@ -106,37 +113,32 @@ impl Assembler {
         for (i, &ri) in island_rows.iter().enumerate() {
             self.row_local[ri] = i;
         }
-        let dyn_local =
-            |b: Option<usize>| b.filter(|&i| motion[i].dynamic).map(|i| islands.local_index(i).unwrap());
 
         // M⁻¹ Jᵀ blocks, b, bounds, findex; count rows per body.
-        self.w_a.clear();
-        self.w_b.clear();
+        self.w.clear();
         self.b.clear();
         self.lo.clear();
         self.hi.clear();
         self.findex.clear();
         self.body_rows_start.clear();
         self.body_rows_start.resize(nb + 1, 0);
-        let zero = Vector3::zeros();
         for &ri in island_rows {
             let r = &rows[ri];
-            let side = |b: Option<usize>, j: &Jac6| match b {
-                Some(i) if motion[i].dynamic => motion[i].apply_inv_mass(j),
-                _ => Jac6::default(),
-            };
-            self.w_a.push(side(r.body_a, &r.j_a));
-            self.w_b.push(side(r.body_b, &r.j_b));
-            let vel = |b: Option<usize>| b.map(|i| (motion[i].v, motion[i].w)).unwrap_or((zero, zero));
-            let (va, wa) = vel(r.body_a);
-            let (vb, wb) = vel(r.body_b);
-            self.b.push(r.rhs - r.j_a.dot(&va, &wa) - r.j_b.dot(&vb, &wb));
+            let mut w = [Jac6::default(); MAX_ROW_BODIES];
+            let mut jv = 0.0;
+            for (s, ws) in w.iter_mut().enumerate() {
+                let Some(b) = r.bodies[s] else { continue };
+                jv += r.jac[s].dot(&motion[b].v, &motion[b].w);
+                if motion[b].dynamic {
+                    *ws = motion[b].apply_inv_mass(&r.jac[s]);
+                    self.body_rows_start[dyn_local(r, s, islands, motion).unwrap() + 1] += 1;
+                }
+            }
+            self.w.push(w);
+            self.b.push(r.rhs - jv);
             self.lo.push(r.lo);
             self.hi.push(r.hi);
             self.findex.push(r.findex.map(|f| self.row_local[f]));
-            for b in [dyn_local(r.body_a), dyn_local(r.body_b)].into_iter().flatten() {
-                self.body_rows_start[b + 1] += 1;
-            }
         }
         for j in 0..nb {
             self.body_rows_start[j + 1] += self.body_rows_start[j];
@@ -144,12 +146,11 @@ impl Assembler {
         self.fill.clear();
         self.fill.extend_from_slice(&self.body_rows_start[..nb]);
         self.body_rows.clear();
-        self.body_rows.resize(self.body_rows_start[nb], (0, false));
+        self.body_rows.resize(self.body_rows_start[nb], (0, 0));
         for (i, &ri) in island_rows.iter().enumerate() {
-            let r = &rows[ri];
-            for (b, side_b) in [(dyn_local(r.body_a), false), (dyn_local(r.body_b), true)] {
-                if let Some(b) = b {
-                    self.body_rows[self.fill[b]] = (i, side_b);
+            for s in 0..MAX_ROW_BODIES {
+                if let Some(b) = dyn_local(&rows[ri], s, islands, motion) {
+                    self.body_rows[self.fill[b]] = (i, s);
                     self.fill[b] += 1;
                 }
             }
@@ -165,13 +166,14 @@ impl Assembler {
         for (i, &ri) in island_rows.iter().enumerate() {
             let r = &rows[ri];
             self.touched.clear();
-            for (b, j_i) in [(dyn_local(r.body_a), &r.j_a), (dyn_local(r.body_b), &r.j_b)] {
-                let Some(b) = b else { continue };
-                for &(j, side_b) in &self.body_rows[self.body_rows_start[b]..self.body_rows_start[b + 1]] {
+            for s in 0..MAX_ROW_BODIES {
+                let Some(b) = dyn_local(r, s, islands, motion) else { continue };
+                let j_i = &r.jac[s];
+                for &(j, sj) in &self.body_rows[self.body_rows_start[b]..self.body_rows_start[b + 1]] {
                     if j < i {
                         continue;
                     }
-                    let w = if side_b { &self.w_b[j] } else { &self.w_a[j] };
+                    let w = &self.w[j][sj];
                     let v = j_i.lin.dot(&w.lin) + j_i.ang.dot(&w.ang);
                     if self.stamp[j] != i {
                         self.stamp[j] = i;
@@ -210,14 +212,15 @@ impl Assembler {
         k: usize,
         islands: &Islands,
         rows: &[ConstraintRow],
-        motion: &[BodyMotion],
         v: &mut [Vector3<f64>],
         w: &mut [Vector3<f64>],
     ) {
         for (i, &ri) in islands.rows(k).iter().enumerate() {
             let (r, l) = (&rows[ri], self.lambda[i]);
-            for (b, wj) in [(r.body_a, &self.w_a[i]), (r.body_b, &self.w_b[i])] {
-                if let Some(b) = b.filter(|&b| motion[b].dynamic) {
+            for (s, wj) in self.w[i].iter().enumerate() {
+                // Non-dynamic blocks carry a zero `M⁻¹ Jᵀ`; skip them anyway (no write to a
+                // kinematic body's velocity).
+                if let Some(b) = r.bodies[s].filter(|_| *wj != Jac6::default()) {
                     v[b] += wj.lin * l;
                     w[b] += wj.ang * l;
                 }
@@ -255,38 +258,33 @@ mod tests {
                 mo.inv_inertia = Matrix3::from_iterator(spd.iter().copied());
             }
         }
-        let pairs = [
-            (Some(0), Some(1)),
-            (Some(0), Some(1)),
-            (Some(1), Some(2)),
-            (Some(2), None),
-            (Some(4), Some(3)),
-            (Some(3), Some(2)),
-            (Some(0), None),
+        // Two-body rows (joints) and rows on three and four bodies (couplings), sharing bodies.
+        let sets: [&[Option<usize>]; 9] = [
+            &[Some(0), Some(1)],
+            &[Some(0), Some(1)],
+            &[Some(1), Some(2)],
+            &[Some(2), None],
+            &[Some(4), Some(3)],
+            &[Some(3), Some(2)],
+            &[Some(0), None],
+            &[Some(0), Some(1), Some(3)],
+            &[Some(2), Some(4), Some(0), Some(3)],
         ];
         let mut rows = Vec::new();
-        for (q, &(a, b)) in pairs.iter().enumerate() {
-            let mut jr = || {
+        for (q, set) in sets.iter().enumerate() {
+            let key = RowKey::Joint { joint: JointId(q as u32), row: JointRow::Locked(0) };
+            let mut row = ConstraintRow::new(key, RowKind::Position);
+            for &b in set.iter() {
                 let r = |rng: &mut ChaCha8Rng| rng.random_range(-1.0..1.0);
-                Jac6::new(
+                let j = Jac6::new(
                     Vector3::new(r(&mut rng), r(&mut rng), r(&mut rng)),
                     Vector3::new(r(&mut rng), r(&mut rng), r(&mut rng)),
-                )
-            };
-            rows.push(ConstraintRow {
-                key: RowKey::Joint { joint: JointId(q as u32), row: JointRow::Locked(0) },
-                kind: RowKind::Position,
-                body_a: a,
-                body_b: b,
-                j_a: jr(),
-                j_b: jr(),
-                phi: 0.0,
-                rhs: 0.1 * q as f64,
-                compliance: 1e-3 * q as f64,
-                lo: f64::NEG_INFINITY,
-                hi: f64::INFINITY,
-                findex: None,
-            });
+                );
+                assert!(row.add_block(b, j));
+            }
+            row.rhs = 0.1 * q as f64;
+            row.compliance = 1e-3 * q as f64;
+            rows.push(row);
         }
         let dynamic: Vec<bool> = motion.iter().map(|m| m.dynamic).collect();
         let mut isl = Islands::default();
@@ -316,12 +314,10 @@ mod tests {
         }
         for (i, &ri) in isl.rows(0).iter().enumerate() {
             let r = &rows[ri];
-            for (b, jb) in [(r.body_a, r.j_a), (r.body_b, r.j_b)] {
-                if let Some(b) = b {
-                    for c in 0..3 {
-                        j[(i, 6 * b + c)] = jb.lin[c];
-                        j[(i, 6 * b + 3 + c)] = jb.ang[c];
-                    }
+            for (b, jb) in r.blocks() {
+                for c in 0..3 {
+                    j[(i, 6 * b + c)] += jb.lin[c];
+                    j[(i, 6 * b + 3 + c)] += jb.ang[c];
                 }
             }
         }
@@ -335,6 +331,17 @@ mod tests {
             assert!((p.b()[i] - b_ref[i]).abs() < 1e-13);
             for k in 0..m {
                 assert!((p.a().get(i, k) - a_ref[(i, k)]).abs() < 1e-12, "A[{i},{k}]");
+            }
+        }
+        // The velocity update equals the dense M⁻¹ Jᵀ λ (kinematic body 4 untouched).
+        asm.lambda = (0..m).map(|_| rng.random_range(-1.0..1.0)).collect();
+        let dv_ref = &minv * j.transpose() * nalgebra::DVector::from_column_slice(&asm.lambda);
+        let (mut v, mut w) = (vec![Vector3::zeros(); n], vec![Vector3::zeros(); n]);
+        asm.apply_impulses(0, &isl, &rows, &mut v, &mut w);
+        for k in 0..n {
+            for c in 0..3 {
+                assert!((v[k][c] - dv_ref[6 * k + c]).abs() < 1e-13, "v[{k}]");
+                assert!((w[k][c] - dv_ref[6 * k + 3 + c]).abs() < 1e-13, "w[{k}]");
             }
         }
     }

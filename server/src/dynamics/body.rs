@@ -14,6 +14,12 @@
 //!   M⁻¹ = diag(m⁻¹ 𝟙₃, I_w⁻¹),   I_w⁻¹ = R I_body⁻¹ Rᵀ,   I_body⁻¹ = P diag(1/I₁, 1/I₂, 1/I₃) Pᵀ.
 //! ```
 //!
+//! **Damping** (optional, per body, rates `d ≥ 0` in 1/s, as rapier's `linear_damping`): the
+//! velocity carried into the step decays as `v_free = v / (1 + h d) + h f / m` (and likewise `ω`), an
+//! unconditionally stable implicit decay of rate `d`. Only the carried velocity is damped, not the
+//! applied forces, so a body at rest under load feels its full weight and its joints carry exactly
+//! the static reactions.
+//!
 //! **Kinds.** `Dynamic` bodies are moved by forces and constraints. `Kinematic` bodies follow a
 //! scripted velocity (infinite mass: constraints do not change it, but it enters `b` of eq. 2 through
 //! `J v`). `Static` bodies never move. Neither of the last two joins islands.
@@ -78,6 +84,25 @@ pub fn cylinder_inertia(mass: f64, radius: f64, half_length: f64) -> Vector3<f64
     Vector3::new(t, t, 0.5 * mass * radius * radius)
 }
 
+/// Principal moments of a solid capsule along the body `z` axis about its centre: a cylinder of
+/// radius `radius` and length `2 half_length` capped by two hemispheres (uniform density). With
+/// `m_c`, `m_s` the masses of the cylinder and of the two caps (in the ratio of their volumes
+/// `π r² ℓ : 4/3 π r³`, `ℓ = 2 half_length`),
+///
+/// ```text
+///   I_z = m_c r²/2 + 2 m_s r²/5,
+///   I_x = I_y = m_c (r²/4 + ℓ²/12) + m_s (2r²/5 + ℓ²/4 + 3ℓr/8)
+/// ```
+///
+/// (each cap: `2/5 m r²` about its flat face, moved to the centre through its centroid at `3r/8`).
+pub fn capsule_inertia(mass: f64, radius: f64, half_length: f64) -> Vector3<f64> {
+    let (r, l) = (radius, 2.0 * half_length);
+    let (v_c, v_s) = (l, 4.0 / 3.0 * r);
+    let (m_c, m_s) = (mass * v_c / (v_c + v_s), mass * v_s / (v_c + v_s));
+    let t = m_c * (r * r / 4.0 + l * l / 12.0) + m_s * (0.4 * r * r + l * l / 4.0 + 0.375 * l * r);
+    Vector3::new(t, t, 0.5 * m_c * r * r + 0.4 * m_s * r * r)
+}
+
 /// Builder of a rigid body; validated by [`World::add_body`](super::World::add_body).
 #[derive(Debug, Clone)]
 pub struct BodyBuilder {
@@ -90,6 +115,8 @@ pub struct BodyBuilder {
     orientation: Quaternion<f64>,
     linvel: Vector3<f64>,
     angvel: Vector3<f64>,
+    linear_damping: f64,
+    angular_damping: f64,
 }
 
 impl BodyBuilder {
@@ -104,6 +131,8 @@ impl BodyBuilder {
             orientation: Quaternion::identity(),
             linvel: Vector3::zeros(),
             angvel: Vector3::zeros(),
+            linear_damping: 0.0,
+            angular_damping: 0.0,
         }
     }
 
@@ -159,6 +188,18 @@ impl BodyBuilder {
         self
     }
 
+    /// Linear damping rate `d ≥ 0` (1/s; see the module doc).
+    pub fn linear_damping(mut self, d: f64) -> Self {
+        self.linear_damping = d;
+        self
+    }
+
+    /// Angular damping rate `d ≥ 0` (1/s).
+    pub fn angular_damping(mut self, d: f64) -> Self {
+        self.angular_damping = d;
+        self
+    }
+
     /// The name given.
     pub fn name(&self) -> &str {
         &self.name
@@ -204,6 +245,12 @@ impl BodyBuilder {
                 return Err(BodyError::NonFinite { body: body(), what });
             }
         }
+        for (what, d) in [("linear damping", self.linear_damping), ("angular damping", self.angular_damping)]
+        {
+            if !(d.is_finite() && d >= 0.0) {
+                return Err(BodyError::InvalidDamping { body: body(), what, value: d });
+            }
+        }
         if self.kind == BodyKind::Static
             && (self.linvel != Vector3::zeros() || self.angvel != Vector3::zeros())
         {
@@ -223,6 +270,8 @@ impl BodyBuilder {
             orientation,
             linvel: self.linvel,
             angvel: self.angvel,
+            linear_damping: self.linear_damping,
+            angular_damping: self.angular_damping,
         })
     }
 }
@@ -254,6 +303,8 @@ pub struct RigidBody {
     pub(crate) orientation: UnitQuaternion<f64>,
     pub(crate) linvel: Vector3<f64>,
     pub(crate) angvel: Vector3<f64>,
+    linear_damping: f64,
+    angular_damping: f64,
 }
 
 impl RigidBody {
@@ -314,6 +365,14 @@ impl RigidBody {
     /// Linear velocity of the centre of mass (world).
     pub fn linvel(&self) -> Vector3<f64> {
         self.linvel
+    }
+    /// Linear damping rate (1/s).
+    pub fn linear_damping(&self) -> f64 {
+        self.linear_damping
+    }
+    /// Angular damping rate (1/s).
+    pub fn angular_damping(&self) -> f64 {
+        self.angular_damping
     }
     /// Angular velocity (world).
     pub fn angvel(&self) -> Vector3<f64> {
@@ -387,6 +446,37 @@ mod tests {
         assert_eq!(sphere_inertia(10.0, 1.0), Vector3::repeat(4.0));
         let c = cylinder_inertia(12.0, 1.0, 1.0);
         assert!((c - Vector3::new(7.0, 7.0, 6.0)).norm() < 1e-12);
+        // Capsule limits: a thin rod (m ℓ²/12, ~0) and a sphere (2/5 m r²).
+        let rod = capsule_inertia(3.0, 1e-9, 1.0);
+        assert!((rod.x - 3.0 * 4.0 / 12.0).abs() < 1e-8 && rod.z < 1e-15);
+        let ball = capsule_inertia(5.0, 0.5, 0.0);
+        assert!((ball - sphere_inertia(5.0, 0.5)).norm() < 1e-15);
+        // And against a numerical integration over the solid (midpoint rule on a grid).
+        let (m, r, hl) = (2.0, 0.3, 0.5);
+        let cap = capsule_inertia(m, r, hl);
+        let n = 120;
+        let (mut vol, mut ix, mut iz) = (0.0, 0.0, 0.0);
+        let (ex, ez) = (r, hl + r);
+        let (dx, dz) = (2.0 * ex / n as f64, 2.0 * ez / n as f64);
+        for i in 0..n {
+            for j in 0..n {
+                for k in 0..n {
+                    let p = Vector3::new(
+                        -ex + (i as f64 + 0.5) * dx,
+                        -ex + (j as f64 + 0.5) * dx,
+                        -ez + (k as f64 + 0.5) * dz,
+                    );
+                    let axial = (p.z.abs() - hl).max(0.0);
+                    if p.x * p.x + p.y * p.y + axial * axial <= r * r {
+                        vol += 1.0;
+                        ix += p.y * p.y + p.z * p.z;
+                        iz += p.x * p.x + p.y * p.y;
+                    }
+                }
+            }
+        }
+        let (ix, iz) = (m * ix / vol, m * iz / vol);
+        assert!((cap.x - ix).abs() < 2e-3 * ix && (cap.z - iz).abs() < 2e-3 * iz, "{cap} vs {ix}, {iz}");
     }
 
     #[test]

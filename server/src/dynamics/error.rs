@@ -1,6 +1,7 @@
 //! Typed errors of the dynamics, one enum per operation (iceoryx2/faer style): building the world
-//! ([`SettingsError`]), adding a body ([`BodyError`]), a joint ([`JointError`]) or a force element
-//! ([`ForceError`]), changing a body's state ([`StateError`]) and stepping ([`StepError`]).
+//! ([`SettingsError`]), adding a body ([`BodyError`]), a joint ([`JointError`]), a coupling
+//! ([`CouplingError`]), a chain ([`ChainError`]) or a force element ([`ForceError`]), changing a
+//! body's state ([`StateError`]) or a control input ([`ControlError`]) and stepping ([`StepError`]).
 //! [`ModelError`] joins the model-building ones for callers (scene loaders) that want one type.
 //!
 //! Every error names the offending item (body or joint name, or id when no name applies). Soft
@@ -10,7 +11,9 @@
 use thiserror::Error;
 
 use super::body::BodyId;
+use super::coupling::CouplingId;
 use super::joint::JointId;
+use super::motor::JointMotor;
 use crate::solver::MlcpError;
 
 /// Errors of [`World::new`](super::World::new).
@@ -87,6 +90,16 @@ pub enum BodyError {
         /// Which field.
         what: &'static str,
     },
+    /// A damping rate is negative, NaN or infinite.
+    #[error("body '{body}': {what} must be finite and >= 0 (got {value})")]
+    InvalidDamping {
+        /// Body name.
+        body: String,
+        /// `linear damping` or `angular damping`.
+        what: &'static str,
+        /// The value.
+        value: f64,
+    },
     /// A static body was given a velocity.
     #[error("body '{body}': a static body cannot move (give it kind Kinematic to script its motion)")]
     StaticBodyMoving {
@@ -137,6 +150,14 @@ pub enum JointError {
         /// Its norm.
         norm: f64,
     },
+    /// The two world axes of a frame (a universal joint's pins) are not perpendicular (within 1e-6).
+    #[error("joint '{joint}': axes are not perpendicular (dot product {dot})")]
+    NonPerpendicularAxes {
+        /// Joint name.
+        joint: String,
+        /// Their dot product.
+        dot: f64,
+    },
     /// A local frame's rotation is not a unit quaternion (or has a NaN).
     #[error("joint '{joint}': {which} rotation has norm {norm}, expected 1")]
     NonUnitFrame {
@@ -160,7 +181,8 @@ pub enum JointError {
     InvalidCompliance {
         /// Joint name.
         joint: String,
-        /// Row slot (0–5 locked rows, 6 lower limit, 7 upper limit, 8 motor).
+        /// Row slot ([`JointRow::slot`](super::JointRow::slot): 0–5 locked rows, then lower
+        /// limit, upper limit, motor of the linear axis (6–8) and of the angular axis (9–11)).
         row: usize,
         /// The value.
         value: f64,
@@ -173,7 +195,7 @@ pub enum JointError {
         /// The value.
         value: f64,
     },
-    /// Limits or a motor on a joint without a free axis (fixed, ball).
+    /// Limits or a motor on a joint without a free axis (fixed, ball, universal).
     #[error("joint '{joint}': a {kind} joint has no free axis for a limit or motor")]
     NoFreeAxis {
         /// Joint name.
@@ -193,16 +215,158 @@ pub enum JointError {
         /// Activation margin.
         margin: f64,
     },
-    /// A motor's target speed is not finite or its force bound is negative / not finite.
-    #[error("joint '{joint}': invalid motor (target speed {target_speed}, max force {max_force})")]
+    /// Limits or a motor on an axis the joint does not have free (a linear limit on a hinge).
+    #[error("joint '{joint}': a {kind} joint has no free {axis} axis")]
+    NoSuchAxis {
+        /// Joint name.
+        joint: String,
+        /// Joint kind name.
+        kind: &'static str,
+        /// `linear` or `angular`.
+        axis: &'static str,
+    },
+    /// A motor parameter is out of range: a non-finite target (speed or position), a negative or
+    /// non-finite force bound, a speed bound not `> 0`, a gain outside `(0, 1]`.
+    #[error("joint '{joint}': invalid motor {motor:?}")]
     InvalidMotor {
         /// Joint name.
         joint: String,
-        /// Target speed.
-        target_speed: f64,
-        /// Force (torque) bound.
-        max_force: f64,
+        /// The motor given.
+        motor: JointMotor,
     },
+}
+
+/// Errors of [`World::add_coupling`](super::World::add_coupling).
+#[derive(Debug, Clone, PartialEq, Error)]
+pub enum CouplingError {
+    /// Couplings need a non-empty name.
+    #[error("a coupling needs a non-empty name")]
+    EmptyName,
+    /// Another coupling already has this name.
+    #[error("coupling '{coupling}': the name is already taken")]
+    DuplicateName {
+        /// The name.
+        coupling: String,
+    },
+    /// The ratio is zero, negative, NaN or infinite.
+    #[error(
+        "coupling '{coupling}': ratio must be finite and > 0 (got {ratio}); reverse a shaft through its joint axis"
+    )]
+    InvalidRatio {
+        /// Coupling name.
+        coupling: String,
+        /// The ratio.
+        ratio: f64,
+    },
+    /// A joint id that the world does not hold.
+    #[error("coupling '{coupling}': unknown joint {joint:?}")]
+    UnknownJoint {
+        /// Coupling name.
+        coupling: String,
+        /// The id given.
+        joint: JointId,
+    },
+    /// The same joint is given for two shafts.
+    #[error("coupling '{coupling}': joint '{joint}' is used for two shafts")]
+    RepeatedJoint {
+        /// Coupling name.
+        coupling: String,
+        /// Joint name.
+        joint: String,
+    },
+    /// A shaft's joint has no free rotation (only hinge and cylindrical joints have one).
+    #[error("coupling '{coupling}': joint '{joint}' is a {kind} joint, which has no free rotation to couple")]
+    NotRotational {
+        /// Coupling name.
+        coupling: String,
+        /// Joint name.
+        joint: String,
+        /// Its kind.
+        kind: &'static str,
+    },
+    /// The shafts' joints touch more bodies than one row holds (4): give a differential's shafts
+    /// a common housing.
+    #[error(
+        "coupling '{coupling}': its joints touch {bodies} bodies, at most 4 fit one row (give the shafts a common housing)"
+    )]
+    TooManyBodies {
+        /// Coupling name.
+        coupling: String,
+        /// Distinct bodies touched.
+        bodies: usize,
+    },
+    /// The compliance is negative, NaN or infinite.
+    #[error("coupling '{coupling}': compliance must be finite and >= 0 (got {value})")]
+    InvalidCompliance {
+        /// Coupling name.
+        coupling: String,
+        /// The value.
+        value: f64,
+    },
+    /// The clutch torque bound is negative, NaN or infinite.
+    #[error("coupling '{coupling}': max torque must be finite and >= 0 (got {value})")]
+    InvalidMaxTorque {
+        /// Coupling name.
+        coupling: String,
+        /// The value.
+        value: f64,
+    },
+}
+
+/// Errors of [`World::add_chain`](super::World::add_chain). A refused chain adds nothing.
+#[derive(Debug, Clone, PartialEq, Error)]
+pub enum ChainError {
+    /// Chains need a non-empty name (the prefix of their bodies' and joints' names).
+    #[error("a chain needs a non-empty name")]
+    EmptyName,
+    /// A parameter is NaN, infinite or out of range.
+    #[error("chain '{chain}': {what} = {value} is not allowed")]
+    InvalidParameter {
+        /// Chain name.
+        chain: String,
+        /// Which parameter.
+        what: &'static str,
+        /// The value.
+        value: f64,
+    },
+    /// The direction is not of unit length (within 1e-6) or has a NaN.
+    #[error("chain '{chain}': direction has norm {norm}, expected 1")]
+    NonUnitDirection {
+        /// Chain name.
+        chain: String,
+        /// Its norm.
+        norm: f64,
+    },
+    /// A segment or joint name the chain would create is taken.
+    #[error("chain '{chain}': the name '{name}' is already taken")]
+    NameTaken {
+        /// Chain name.
+        chain: String,
+        /// The taken body or joint name.
+        name: String,
+    },
+    /// An end is attached to a body that the world does not hold.
+    #[error("chain '{chain}': unknown body {body:?}")]
+    UnknownBody {
+        /// Chain name.
+        chain: String,
+        /// The id given.
+        body: BodyId,
+    },
+    /// Both ends are attached to the same body.
+    #[error("chain '{chain}': both ends are attached to body '{body}'")]
+    EndsOnOneBody {
+        /// Chain name.
+        chain: String,
+        /// Body name.
+        body: String,
+    },
+    /// A segment was refused (not expected after the chain's own validation).
+    #[error(transparent)]
+    Body(#[from] BodyError),
+    /// A joint was refused (not expected after the chain's own validation).
+    #[error(transparent)]
+    Joint(#[from] JointError),
 }
 
 /// Errors of [`World::add_force`](super::World::add_force).
@@ -249,6 +413,24 @@ pub enum ForceError {
         /// The value.
         value: f64,
     },
+    /// A buoyancy element without sample points.
+    #[error("force '{force}': a buoyancy element needs at least one sample point")]
+    NoSamplePoints {
+        /// Force element name.
+        force: String,
+    },
+    /// A sample point's position is not finite or its volume or height is not `> 0`.
+    #[error("force '{force}': sample point {point}: {what} = {value} is not allowed")]
+    InvalidPoint {
+        /// Force element name.
+        force: String,
+        /// Index of the point.
+        point: usize,
+        /// `position`, `volume` or `height`.
+        what: &'static str,
+        /// The value.
+        value: f64,
+    },
 }
 
 /// Errors of changing a body's state ([`World::set_velocity`](super::World::set_velocity),
@@ -271,15 +453,22 @@ pub enum StateError {
     },
 }
 
-/// Errors of [`World::set_joint_motor`](super::World::set_joint_motor) (live control inputs).
+/// Errors of live control inputs ([`World::set_joint_motor`](super::World::set_joint_motor),
+/// [`World::set_coupling_max_torque`](super::World::set_coupling_max_torque)).
 #[derive(Debug, Clone, PartialEq, Error)]
 pub enum ControlError {
     /// A joint id that the world does not hold.
     #[error("unknown joint {0:?}")]
     UnknownJoint(JointId),
-    /// The joint has no free axis, or the motor is invalid.
+    /// A coupling id that the world does not hold.
+    #[error("unknown coupling {0:?}")]
+    UnknownCoupling(CouplingId),
+    /// The joint has no such free axis, or the motor is invalid.
     #[error(transparent)]
     Joint(#[from] JointError),
+    /// The clutch bound is invalid.
+    #[error(transparent)]
+    Coupling(#[from] CouplingError),
 }
 
 /// Errors of [`World::step`](super::World::step). On error the world state is left as it was
@@ -314,6 +503,12 @@ pub enum ModelError {
     /// A joint.
     #[error(transparent)]
     Joint(#[from] JointError),
+    /// A coupling.
+    #[error(transparent)]
+    Coupling(#[from] CouplingError),
+    /// A chain.
+    #[error(transparent)]
+    Chain(#[from] ChainError),
     /// A force element.
     #[error(transparent)]
     Force(#[from] ForceError),

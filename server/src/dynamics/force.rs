@@ -1,30 +1,84 @@
-//! Force elements: applied forces `f` of paper eq. 1 (not constraints). Gravity is a world setting
-//! (`f = m g` on every dynamic body); the elements here are evaluated at the start of the step
-//! (explicitly) and enter the step through `h f` in `v_free = v + h M⁻¹ f`.
+//! Force elements: applied force laws `f` of paper eq. 1 (not constraints). Gravity is a world
+//! setting (`f = m g` on every dynamic body, explicit, exact for a constant force). The elements
+//! here are stiff or dissipative, so both are integrated *implicitly* — an explicit evaluation
+//! diverges once `h √(k/m)` or `h c/m` exceeds 2, which a light body on an ordinary spring (or a
+//! light float in water) easily reaches.
 //!
 //! **Linear spring–damper** between a point `p_a` on body A and `p_b` on body B (or a world point):
-//! with `d = p_b − p_a`, `L = |d|`, `n = d / L` and the separation speed `L̇ = n · (v(p_b) − v(p_a))`,
+//! with `d = p_b − p_a`, `L = |d|`, `n = d / L`, the law is `F = k (L − L₀) + c L̇` pulling the ends
+//! together. It is handed to the solver as one *force row* on the pair (the soft-constraint form of
+//! ODE's ERP/CFM), with `φ = L − L₀` and the exact `L̇ = J v`, `J_A = (−n, −(p_a − x_A) × n)`,
+//! `J_B = (n, (p_b − x_B) × n)`. Requiring the law at the end of the step,
+//! `λ = −h (k (φ + h L̇⁺) + c L̇⁺)`, is the row equation of `rows.rs`,
 //!
 //! ```text
-//!   F = k (L − L₀) + c L̇,     f_A = +F n at p_a,   f_B = −F n at p_b,
+//!   J v⁺ + (c_row / h²) λ = −β φ / h,     c_row = 1 / (k + c/h),     β = h k / (h k + c),
 //! ```
 //!
-//! (torques `(p − x) × f`). A stretched spring pulls the ends together. Explicit evaluation is stable
-//! for `h √(k/m) < 2` and `h c/m < 2` (m the smaller end mass); stiffer couplings belong in a
-//! compliant joint row (`1/c` stiffness, implicit). For `L < 1e-12` the direction is undefined and
-//! the element applies nothing.
+//! unbounded. So the spring is integrated by implicit Euler together with the joints: stable for any
+//! stiffness and mass, exact at rest (`λ / h = −k φ`: the static deflection is `F / k`), and a spring
+//! between two dynamic bodies joins their islands. Its rows are [`RowKind::Force`]: not projected, not
+//! counted as violations. For `L < 1e-12` the direction is undefined and the element applies nothing.
 //!
-//! Later elements (hydrostatic buoyancy and drag against a water plane, for the offshore scene) are
-//! further variants of [`ForceElement`] with the same `accumulate` contract.
+//! **Buoyancy and drag** on sample points against a water plane with optional waves (`buoyancy.rs`):
+//! evaluated at the step's start (time `t`) with their Jacobians — the drag's `D = ∂f/∂v` and the
+//! buoyancy stiffness `K = ∂f/∂x` per body — and integrated linearly implicitly (Baraff–Witkin): the
+//! body's unconstrained velocity change solves the 6 × 6 system
+//!
+//! ```text
+//!   (M − h D − h² K) Δv = h f + h² K v,     v_free = v + Δv,
+//! ```
+//!
+//! then the constraints act with `M` as usual. Equilibria (`f = 0`) and steady speeds are those of
+//! the force law exactly; the scheme is unconditionally stable for the linear part.
 
-use nalgebra::Vector3;
+use nalgebra::{Matrix6, Vector3};
 
 use super::body::{BodyId, RigidBody};
+use super::buoyancy::Buoyancy;
 use super::error::ForceError;
+use super::joint_rows::Side;
+use super::rows::{ConstraintRow, Jac6, RowKey, RowKind};
 
 /// Stable id of a force element in its [`World`](super::World).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub struct ForceId(pub u32);
+
+impl ForceId {
+    /// Index in the world's force list.
+    #[inline]
+    pub fn index(self) -> usize {
+        self.0 as usize
+    }
+}
+
+/// Per-body accumulators of the applied forces of a step (world-indexed, reused): force, torque about
+/// the centre of mass, and for bodies with implicit elements (`implicit[i]`) the 6 × 6 Jacobians
+/// `D = ∂f/∂(v, ω)` and `K = ∂f/∂(x, θ)` (module doc).
+#[derive(Debug, Default)]
+pub(crate) struct ForceAccumulator {
+    pub force: Vec<Vector3<f64>>,
+    pub torque: Vec<Vector3<f64>>,
+    pub damping: Vec<Matrix6<f64>>,
+    pub stiffness: Vec<Matrix6<f64>>,
+    pub implicit: Vec<bool>,
+}
+
+impl ForceAccumulator {
+    /// Zeroes everything for `n` bodies.
+    pub fn reset(&mut self, n: usize) {
+        for (v, zero) in [(&mut self.force, Vector3::zeros()), (&mut self.torque, Vector3::zeros())] {
+            v.clear();
+            v.resize(n, zero);
+        }
+        for m in [&mut self.damping, &mut self.stiffness] {
+            m.clear();
+            m.resize(n, Matrix6::zeros());
+        }
+        self.implicit.clear();
+        self.implicit.resize(n, false);
+    }
+}
 
 /// Linear spring–damper between two body points.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -45,11 +99,42 @@ pub struct SpringDamper {
     pub damping: f64,
 }
 
+impl SpringDamper {
+    /// Appends the spring's force row (module doc) to `out`, with the ends `a` (body A) and `b` at
+    /// the current poses; nothing for a spring of zero length or with `k = c = 0`.
+    pub(crate) fn push_row(&self, id: ForceId, a: &Side, b: &Side, h: f64, out: &mut Vec<ConstraintRow>) {
+        let (k, c) = (self.stiffness, self.damping);
+        if k == 0.0 && c == 0.0 {
+            return;
+        }
+        let p_a = a.x + a.q * self.anchor_a;
+        let p_b = b.x + b.q * self.anchor_b;
+        let d = p_b - p_a;
+        let l = d.norm();
+        if l < 1e-12 {
+            return;
+        }
+        let n = d / l;
+        let j_a = Jac6::new(-n, -(p_a - a.x).cross(&n));
+        let j_b = Jac6::new(n, (p_b - b.x).cross(&n));
+        let mut r = ConstraintRow::pair(RowKey::Force(id), RowKind::Force, a.index, j_a, b.index, j_b);
+        // c_row = 1/(k + c/h), β = k c_row = h k / (h k + c).
+        let compliance = 1.0 / (k + c / h);
+        let beta = k * compliance;
+        r.phi = l - self.rest_length;
+        r.compliance = compliance;
+        r.rhs = -beta * r.phi / h;
+        out.push(r);
+    }
+}
+
 /// An applied-force element.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, PartialEq)]
 pub enum ForceElement {
     /// Linear spring–damper.
     SpringDamper(SpringDamper),
+    /// Hydrostatic buoyancy and drag on a body's sample points.
+    Buoyancy(Buoyancy),
 }
 
 impl ForceElement {
@@ -83,52 +168,30 @@ impl ForceElement {
                 }
                 Ok(())
             }
+            ForceElement::Buoyancy(b) => b.validate(name, bodies),
         }
     }
 
-    /// Adds the element's forces and torques (about each centre of mass, world frame) to the
-    /// accumulators (indexed like `bodies`).
+    /// Adds the explicit part and the Jacobians of the element at time `t` under gravity `gravity`
+    /// to the accumulators (springs act through their rows instead, [`SpringDamper::push_row`]).
     pub(crate) fn accumulate(
         &self,
         bodies: &[RigidBody],
-        force: &mut [Vector3<f64>],
-        torque: &mut [Vector3<f64>],
+        t: f64,
+        gravity: &Vector3<f64>,
+        acc: &mut ForceAccumulator,
     ) {
         match self {
-            ForceElement::SpringDamper(s) => {
-                let a = &bodies[s.body_a.index()];
-                let p_a = a.point_world(s.anchor_a);
-                let (p_b, v_b) = match s.body_b {
-                    Some(id) => {
-                        let b = &bodies[id.index()];
-                        let p = b.point_world(s.anchor_b);
-                        (p, b.point_velocity(p))
-                    }
-                    None => (s.anchor_b, Vector3::zeros()),
-                };
-                let d = p_b - p_a;
-                let l = d.norm();
-                if l < 1e-12 {
-                    return;
-                }
-                let n = d / l;
-                let l_dot = n.dot(&(v_b - a.point_velocity(p_a)));
-                let f = n * (s.stiffness * (l - s.rest_length) + s.damping * l_dot);
-                let ia = s.body_a.index();
-                force[ia] += f;
-                torque[ia] += (p_a - a.position()).cross(&f);
-                if let Some(id) = s.body_b {
-                    let ib = id.index();
-                    force[ib] -= f;
-                    torque[ib] -= (p_b - bodies[ib].position()).cross(&f);
-                }
-            }
+            ForceElement::Buoyancy(b) => b.accumulate(bodies, t, gravity, acc),
+            ForceElement::SpringDamper(_) => {}
         }
     }
 
-    /// Potential energy stored in the element (for energy checks).
-    pub fn potential_energy(&self, bodies: &[RigidBody]) -> f64 {
+    /// Potential energy stored in the element (for energy checks; buoyancy: in still water under
+    /// `gravity`).
+    pub fn potential_energy(&self, bodies: &[RigidBody], gravity: &Vector3<f64>) -> f64 {
         match self {
+            ForceElement::Buoyancy(b) => b.potential_energy(bodies, gravity),
             ForceElement::SpringDamper(s) => {
                 let p_a = bodies[s.body_a.index()].point_world(s.anchor_a);
                 let p_b = match s.body_b {

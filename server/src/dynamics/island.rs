@@ -2,7 +2,7 @@
 //!
 //! Rows couple only bodies they touch, so `A = J M⁻¹ Jᵀ + C/h²` (paper eq. 2) is block diagonal over
 //! the components of the graph whose vertices are the *dynamic* bodies and whose edges are rows
-//! joining two dynamic bodies. Static and kinematic bodies have infinite mass (`M⁻¹ = 0`): a row
+//! joining dynamic bodies (a coupling row on several bodies joins all of them). Static and kinematic bodies have infinite mass (`M⁻¹ = 0`): a row
 //! through one of them couples nothing through it, so they never join two islands (two chains hanging
 //! from one static ceiling are two islands). Each island is one MLCP, solved independently (in a
 //! loop now; the islands share no data, so they may later be solved in parallel).
@@ -28,6 +28,12 @@ pub struct Islands {
     rows_start: Vec<usize>,
     rows: Vec<usize>,
     fill: Vec<usize>,
+}
+
+/// The first dynamic body a row touches.
+#[inline]
+fn first_dynamic(r: &ConstraintRow, dynamic: &[bool]) -> Option<usize> {
+    r.blocks().map(|(b, _)| b).find(|&b| dynamic[b])
 }
 
 impl Islands {
@@ -58,10 +64,13 @@ impl Islands {
         self.parent.extend(0..n as u32);
         self.size.clear();
         self.size.resize(n, 1);
-        let is_dyn = |b: Option<usize>| b.filter(|&i| dynamic[i]);
         for r in rows {
-            if let (Some(a), Some(b)) = (is_dyn(r.body_a), is_dyn(r.body_b)) {
-                self.union(a as u32, b as u32);
+            let mut first = None;
+            for (b, _) in r.blocks().filter(|&(b, _)| dynamic[b]) {
+                match first {
+                    None => first = Some(b as u32),
+                    Some(a) => self.union(a, b as u32),
+                }
             }
         }
         // Number islands in order of their smallest body; count bodies per island.
@@ -103,7 +112,7 @@ impl Islands {
         self.rows_start.clear();
         self.rows_start.resize(k + 1, 0);
         for r in rows {
-            let b = is_dyn(r.body_a).or(is_dyn(r.body_b)).expect("a row touches a dynamic body");
+            let b = first_dynamic(r, dynamic).expect("a row touches a dynamic body");
             self.rows_start[self.body_island[b] as usize + 1] += 1;
         }
         for j in 0..k {
@@ -114,7 +123,7 @@ impl Islands {
         self.rows.clear();
         self.rows.resize(rows.len(), 0);
         for (ri, r) in rows.iter().enumerate() {
-            let b = is_dyn(r.body_a).or(is_dyn(r.body_b)).unwrap();
+            let b = first_dynamic(r, dynamic).unwrap();
             let isl = self.body_island[b] as usize;
             self.rows[self.fill[isl]] = ri;
             self.fill[isl] += 1;
@@ -155,24 +164,13 @@ impl Islands {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::dynamics::coupling::CouplingId;
     use crate::dynamics::joint::{JointId, JointRow};
     use crate::dynamics::rows::{Jac6, RowKey, RowKind};
 
     fn row(a: Option<usize>, b: Option<usize>) -> ConstraintRow {
-        ConstraintRow {
-            key: RowKey::Joint { joint: JointId(0), row: JointRow::Locked(0) },
-            kind: RowKind::Position,
-            body_a: a,
-            body_b: b,
-            j_a: Jac6::default(),
-            j_b: Jac6::default(),
-            phi: 0.0,
-            rhs: 0.0,
-            compliance: 0.0,
-            lo: f64::NEG_INFINITY,
-            hi: f64::INFINITY,
-            findex: None,
-        }
+        let key = RowKey::Joint { joint: JointId(0), row: JointRow::Locked(0) };
+        ConstraintRow::pair(key, RowKind::Position, a, Jac6::default(), b, Jac6::default())
     }
 
     #[test]
@@ -206,5 +204,16 @@ mod tests {
         isl.build(&dynamic, &more);
         assert_eq!(isl.len(), 2);
         assert_eq!(isl.bodies(0), &[1, 2, 5]);
+        // A coupling row on three bodies (through the static body 0) merges what it touches.
+        let mut gear = ConstraintRow::new(RowKey::Coupling(CouplingId(0)), RowKind::Velocity);
+        for b in [0, 4, 5] {
+            assert!(gear.add_block(Some(b), Jac6::default()));
+        }
+        let mut more = rows.to_vec();
+        more.push(gear);
+        isl.build(&dynamic, &more);
+        assert_eq!(isl.len(), 2);
+        assert_eq!(isl.bodies(1), &[3, 4, 5]);
+        assert_eq!(isl.rows(1), &[2, 3, 4, 6, 7]);
     }
 }

@@ -1,34 +1,39 @@
-//! Joint models: what a joint *is* (kind, bodies, frames, compliance, limits, motor). The rows it
+//! Joint models: what a joint *is* (kind, bodies, frames, compliance, limits, motors). The rows it
 //! produces for the solver are built in `joint_rows.rs` (the model is not the solver row, as rapier
-//! keeps `GenericJoint` apart from its `JointConstraint`).
+//! keeps `GenericJoint` apart from its `JointConstraint`); limits and motors are in `motor.rs`.
 //!
 //! **Frames.** A joint holds a local frame on each body, `F_a` on body A and `F_b` on body B (or on
 //! the world when B is absent). In world coordinates `W_a = X_a F_a` and `W_b = X_b F_b`, with
-//! origins (anchors) `p_a`, `p_b` and axes `(e₁, e₂, e₃)` of `W_a`. The *x axis* of the frames is the
-//! joint axis (hinge rotation axis, prismatic slide axis). At rest (no violation) `W_a = W_b`, except
-//! along the free axis.
+//! origins (anchors) `p_a`, `p_b`, axes `(e₁, e₂, e₃)` of `W_a` and `(f₁, f₂, f₃)` of `W_b`. The
+//! *x axis* of the frames is the joint axis (hinge rotation axis, prismatic slide axis, both for a
+//! cylindrical joint; a universal joint's cross pin on A). At rest (no violation) `W_a = W_b`,
+//! except along the free axes.
 //!
-//! | kind | locked rows | free axis |
+//! | kind | locked rows | free motion |
 //! |---|---|---|
 //! | fixed | 3 linear (`e₁, e₂, e₃`) + 3 angular | — |
-//! | hinge | 3 linear + 2 angular (`e₂, e₃` against B's x axis) | rotation about `e₁` |
+//! | hinge | 3 linear + 2 angular (`e₂·f₁ = e₃·f₁ = 0`) | rotation about `e₁` |
 //! | prismatic | 2 linear (`e₂, e₃`) + 3 angular | translation along `e₁` |
+//! | cylindrical | 2 linear (`e₂, e₃`) + 2 angular (`e₂·f₁ = e₃·f₁ = 0`) | translation along and rotation about `e₁` |
+//! | universal | 3 linear + 1 angular (`e₁·f₂ = 0`) | rotations about `e₁` (pin on A) and `f₂` (pin on B) |
 //! | ball | 3 linear | all rotations |
 //!
+//! A **universal** (Cardan) joint is a cross whose pin `e₁` turns in A's fork and whose pin `f₂` turns
+//! in B's fork; the pins stay perpendicular, `e₁ · f₂ = 0`, which blocks the relative twist about
+//! `e₁ × f₂` and transmits torque about it (a drive shaft). Build it with
+//! [`JointBuilder::universal`] from the two world pin directions.
+//!
 //! **Rows of a joint** are numbered by a slot ([`JointRow`]): `0..6` the locked rows in the order of
-//! the table, 6 the lower limit, 7 the upper limit, 8 the motor. Compliance is given per slot; the
-//! slot is also the key under which the row's index state and impulse persist between steps (warm
-//! start).
+//! the table, then per free axis (linear `6..9`, angular `9..12`) the lower limit, the upper limit
+//! and the motor. Compliance is given per slot; the slot is also the key under which the row's index
+//! state and impulse persist between steps (warm start).
 //!
-//! **Free coordinate** (hinge, prismatic): the angle (rad, right-handed about the axis) or the
-//! displacement (m, along the axis) of body A relative to body B — B is the parent, or the world —
-//! zero where the joint was built. Read it with `World::joint_coordinate` / `joint_speed`.
-//!
-//! **Limits**: `lower ≤ s ≤ upper` on the free coordinate (hinge limits within `(−π, π]`). A
-//! unilateral row `λ ∈ [0, ∞)` is emitted only while the coordinate is within `margin` of a bound or
-//! predicted to cross it in the step. **Motor**: a velocity row on the free
-//! axis driving the relative speed to `target_speed`, with impulse bounds `±max_force · h` (a boxed
-//! row: the motor stalls at its force/torque bound).
+//! **Free coordinates** (`motor.rs`): the displacement (m, along the axis) and the angle (rad,
+//! right-handed about the axis) of body A relative to body B — B is the parent, or the world — zero
+//! where the joint was built. Read them with `World::joint_coordinate` / `joint_axis_coordinate`.
+//! [`JointBuilder::limit`] and [`JointBuilder::motor`] act on the joint's *first* free axis
+//! ([`JointKind::free_axes`]: the rotation of a hinge, the translation of a prismatic or cylindrical
+//! joint); [`JointBuilder::axis_limit`] / [`JointBuilder::axis_motor`] name the axis.
 //!
 //! **Compliance and stabilization** per row (paper eq. 1, `C` diagonal): see `rows.rs` for the row
 //! equation. The default compliance `1e-10` is the stiff end of the paper's Table 1 range; the default
@@ -37,6 +42,7 @@
 use nalgebra::{Isometry3, Vector3};
 
 use super::body::BodyId;
+use super::motor::{FreeAxis, JointLimit, JointMotor};
 
 /// Stable id of a joint in its [`World`](super::World) (index in creation order).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
@@ -61,9 +67,23 @@ pub enum JointKind {
     Prismatic,
     /// Spherical: the anchors coincide, rotations are free.
     Ball,
+    /// Translation along and rotation about the frame x axis.
+    Cylindrical,
+    /// Cardan joint: anchors coincide, A's x axis stays perpendicular to B's y axis.
+    Universal,
 }
 
 impl JointKind {
+    /// Every kind.
+    pub const ALL: [JointKind; 6] = [
+        JointKind::Fixed,
+        JointKind::Hinge,
+        JointKind::Prismatic,
+        JointKind::Ball,
+        JointKind::Cylindrical,
+        JointKind::Universal,
+    ];
+
     /// Name used in reports and errors.
     pub fn name(self) -> &'static str {
         match self {
@@ -71,6 +91,8 @@ impl JointKind {
             JointKind::Hinge => "hinge",
             JointKind::Prismatic => "prismatic",
             JointKind::Ball => "ball",
+            JointKind::Cylindrical => "cylindrical",
+            JointKind::Universal => "universal",
         }
     }
 
@@ -79,13 +101,34 @@ impl JointKind {
         match self {
             JointKind::Fixed => 6,
             JointKind::Hinge | JointKind::Prismatic => 5,
+            JointKind::Cylindrical | JointKind::Universal => 4,
             JointKind::Ball => 3,
         }
     }
 
-    /// Whether the joint has one free axis that may carry a limit and a motor.
+    /// The free axes that may carry a limit and a motor, first axis first.
+    pub fn free_axes(self) -> &'static [FreeAxis] {
+        match self {
+            JointKind::Hinge => &[FreeAxis::Angular],
+            JointKind::Prismatic => &[FreeAxis::Linear],
+            JointKind::Cylindrical => &[FreeAxis::Linear, FreeAxis::Angular],
+            JointKind::Fixed | JointKind::Ball | JointKind::Universal => &[],
+        }
+    }
+
+    /// Whether the joint has a free axis that may carry a limit and a motor.
     pub fn has_free_axis(self) -> bool {
-        matches!(self, JointKind::Hinge | JointKind::Prismatic)
+        !self.free_axes().is_empty()
+    }
+
+    /// Whether `axis` is one of the joint's free axes.
+    pub fn has_axis(self, axis: FreeAxis) -> bool {
+        self.free_axes().contains(&axis)
+    }
+
+    /// The first free axis (what [`JointBuilder::limit`] and [`JointBuilder::motor`] act on).
+    pub fn first_axis(self) -> Option<FreeAxis> {
+        self.free_axes().first().copied()
     }
 }
 
@@ -94,16 +137,16 @@ impl JointKind {
 pub enum JointRow {
     /// Locked row `k` (`0..6`, see the module table).
     Locked(u8),
-    /// Lower limit of the free axis.
-    LowerLimit,
-    /// Upper limit of the free axis.
-    UpperLimit,
-    /// Motor of the free axis.
-    Motor,
+    /// Lower limit of a free axis.
+    LowerLimit(FreeAxis),
+    /// Upper limit of a free axis.
+    UpperLimit(FreeAxis),
+    /// Motor of a free axis.
+    Motor(FreeAxis),
 }
 
 /// Number of row slots per joint.
-pub const JOINT_SLOTS: usize = 9;
+pub const JOINT_SLOTS: usize = 12;
 
 impl JointRow {
     /// Slot index `0..JOINT_SLOTS`.
@@ -111,9 +154,9 @@ impl JointRow {
     pub fn slot(self) -> usize {
         match self {
             JointRow::Locked(k) => k as usize,
-            JointRow::LowerLimit => 6,
-            JointRow::UpperLimit => 7,
-            JointRow::Motor => 8,
+            JointRow::LowerLimit(a) => 6 + 3 * a.index(),
+            JointRow::UpperLimit(a) => 7 + 3 * a.index(),
+            JointRow::Motor(a) => 8 + 3 * a.index(),
         }
     }
 }
@@ -121,44 +164,26 @@ impl JointRow {
 /// Default row compliance (paper Table 1, stiff end).
 pub const DEFAULT_COMPLIANCE: f64 = 1e-10;
 
-/// Lower/upper limit of the free coordinate (rad for hinges, m for prismatic joints).
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct JointLimit {
-    /// Lower bound (may be `−∞`).
-    pub lower: f64,
-    /// Upper bound (may be `+∞`).
-    pub upper: f64,
-    /// A limit row is emitted while the coordinate is within this distance of the bound.
-    pub margin: f64,
-}
-
-impl JointLimit {
-    /// Limits with the default activation margin (0.01 rad or m).
-    pub fn new(lower: f64, upper: f64) -> Self {
-        JointLimit { lower, upper, margin: 0.01 }
-    }
-}
-
-/// Velocity motor on the free axis.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct JointMotor {
-    /// Target speed (rad/s or m/s) of A relative to B about/along the axis (B is the parent or the
-    /// world), positive in the sense of the axis.
-    pub target_speed: f64,
-    /// Force (N) or torque (N m) bound, `≥ 0`.
-    pub max_force: f64,
-}
-
 /// How the joint frames are given.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum JointFrames {
-    /// One world frame at the bodies' current poses: origin `anchor`, x axis `axis` (unit). Both
-    /// local frames are derived from it, so the joint starts without violation.
+    /// One world frame at the bodies' current poses: origin `anchor`, x axis `axis` (unit), y and z
+    /// completed deterministically. Both local frames are derived from it, so the joint starts
+    /// without violation.
     World {
         /// Anchor point (world).
         anchor: Vector3<f64>,
         /// Joint axis (world, unit; ignored by ball joints but still validated).
         axis: Vector3<f64>,
+    },
+    /// One world frame with both x and y axes given (unit, perpendicular; z = x × y).
+    WorldAxes {
+        /// Anchor point (world).
+        anchor: Vector3<f64>,
+        /// x axis (world, unit).
+        axis: Vector3<f64>,
+        /// y axis (world, unit, perpendicular to `axis`).
+        secondary: Vector3<f64>,
     },
     /// Local frames on each body (frame x axis = joint axis).
     Local {
@@ -179,8 +204,9 @@ pub struct JointBuilder {
     pub(crate) frames: JointFrames,
     pub(crate) compliance: [f64; JOINT_SLOTS],
     pub(crate) stabilization: f64,
-    pub(crate) limit: Option<JointLimit>,
-    pub(crate) motor: Option<JointMotor>,
+    /// Per free axis ([`FreeAxis::index`]).
+    pub(crate) limits: [Option<JointLimit>; 2],
+    pub(crate) motors: [Option<JointMotor>; 2],
 }
 
 impl JointBuilder {
@@ -200,8 +226,8 @@ impl JointBuilder {
             frames,
             compliance: [DEFAULT_COMPLIANCE; JOINT_SLOTS],
             stabilization: 1.0,
-            limit: None,
-            motor: None,
+            limits: [None; 2],
+            motors: [None; 2],
         }
     }
 
@@ -238,6 +264,32 @@ impl JointBuilder {
         Self::at(name, JointKind::Prismatic, a, b, anchor, axis)
     }
 
+    /// Cylindrical joint: slides along and turns about the world line through `anchor` along `axis`
+    /// (a hydraulic cylinder's piston in its barrel).
+    pub fn cylindrical(
+        name: &str,
+        a: BodyId,
+        b: Option<BodyId>,
+        anchor: Vector3<f64>,
+        axis: Vector3<f64>,
+    ) -> Self {
+        Self::at(name, JointKind::Cylindrical, a, b, anchor, axis)
+    }
+
+    /// Universal (Cardan) joint at `anchor` with its cross pin `pin_a` turning in body A and
+    /// `pin_b` in body B (world directions, unit and perpendicular).
+    pub fn universal(
+        name: &str,
+        a: BodyId,
+        b: Option<BodyId>,
+        anchor: Vector3<f64>,
+        pin_a: Vector3<f64>,
+        pin_b: Vector3<f64>,
+    ) -> Self {
+        let frames = JointFrames::WorldAxes { anchor, axis: pin_a, secondary: pin_b };
+        Self::new(name, JointKind::Universal, a, b, frames)
+    }
+
     /// Ball joint at a world anchor.
     pub fn ball(name: &str, a: BodyId, b: Option<BodyId>, anchor: Vector3<f64>) -> Self {
         Self::at(name, JointKind::Ball, a, b, anchor, Vector3::x())
@@ -261,15 +313,27 @@ impl JointBuilder {
         self
     }
 
-    /// Limits on the free axis.
-    pub fn limit(mut self, limit: JointLimit) -> Self {
-        self.limit = Some(limit);
+    /// Limits on the first free axis (see the module doc).
+    pub fn limit(self, limit: JointLimit) -> Self {
+        let axis = self.kind.first_axis().unwrap_or(FreeAxis::Linear);
+        self.axis_limit(axis, limit)
+    }
+
+    /// Motor on the first free axis (see the module doc).
+    pub fn motor(self, motor: JointMotor) -> Self {
+        let axis = self.kind.first_axis().unwrap_or(FreeAxis::Linear);
+        self.axis_motor(axis, motor)
+    }
+
+    /// Limits on a given free axis.
+    pub fn axis_limit(mut self, axis: FreeAxis, limit: JointLimit) -> Self {
+        self.limits[axis.index()] = Some(limit);
         self
     }
 
-    /// Velocity motor on the free axis.
-    pub fn motor(mut self, motor: JointMotor) -> Self {
-        self.motor = Some(motor);
+    /// Motor on a given free axis.
+    pub fn axis_motor(mut self, axis: FreeAxis, motor: JointMotor) -> Self {
+        self.motors[axis.index()] = Some(motor);
         self
     }
 
@@ -291,8 +355,8 @@ pub struct Joint {
     pub(crate) frame_b: Isometry3<f64>,
     pub(crate) compliance: [f64; JOINT_SLOTS],
     pub(crate) stabilization: f64,
-    pub(crate) limit: Option<JointLimit>,
-    pub(crate) motor: Option<JointMotor>,
+    pub(crate) limits: [Option<JointLimit>; 2],
+    pub(crate) motors: [Option<JointMotor>; 2],
 }
 
 impl Joint {
@@ -332,12 +396,20 @@ impl Joint {
     pub fn stabilization(&self) -> f64 {
         self.stabilization
     }
-    /// Limits, if any.
+    /// Limits of the first free axis, if any.
     pub fn limit(&self) -> Option<JointLimit> {
-        self.limit
+        self.kind.first_axis().and_then(|a| self.axis_limit(a))
     }
-    /// Motor, if any.
+    /// Motor of the first free axis, if any.
     pub fn motor(&self) -> Option<JointMotor> {
-        self.motor
+        self.kind.first_axis().and_then(|a| self.axis_motor(a))
+    }
+    /// Limits of a free axis, if any.
+    pub fn axis_limit(&self, axis: FreeAxis) -> Option<JointLimit> {
+        self.limits[axis.index()]
+    }
+    /// Motor of a free axis, if any.
+    pub fn axis_motor(&self, axis: FreeAxis) -> Option<JointMotor> {
+        self.motors[axis.index()]
     }
 }

@@ -11,20 +11,29 @@
 //! ```
 //!
 //! as the boxed MLCP of eq. 3 with the solver's [`Variant`](crate::solver::Variant) of choice, then
-//! `v⁺ = v + M⁻¹ (h f + Jᵀ λ)` and `x⁺ = x + h v⁺`, `q⁺ = normalize(exp(h ω⁺/2) ⊗ q)`.
+//! `v⁺ = v + M⁻¹ (h f + Jᵀ λ)` and `x⁺ = x + h v⁺`, `q⁺ = normalize(exp(h ω⁺/2) ⊗ q)`. The rows are
+//! those of joints (locked axes, limits, velocity and position motors), couplings (gears,
+//! differentials, clutches: one row on up to four bodies) and spring–dampers (implicit force rows);
+//! buoyancy and drag enter `f` linearly implicitly (`force.rs`).
 //!
 //! | file | concept |
 //! |---|---|
-//! | `body.rs` | rigid bodies: mass properties, kinds, state, builder and validation |
+//! | `body.rs` | rigid bodies: mass properties, kinds, damping, state, builder and validation |
 //! | `force.rs` | applied-force elements (spring–damper; gravity is a world setting) |
-//! | `joint.rs` | joint models: kinds, frames, compliance, stabilization, limits, motors |
+//! | `buoyancy.rs` | hydrostatic buoyancy and drag on sample points, water plane with waves |
+//! | `joint.rs` | joint models: kinds, frames, compliance, stabilization |
+//! | `motor.rs` | free axes, limits, velocity and position-target motors |
+//! | `coupling.rs` | powertrain couplings: gear pairs, differentials, clutches |
+//! | `chain.rs` | chain/cable helper: segments joined by ball joints |
 //! | `rows.rs` | the constraint row handed to the assembly; the row equation and its signs |
 //! | `joint_rows.rs` | joint → rows: violations and Jacobians of each joint kind |
+//! | `coupling_rows.rs` | coupling → its velocity row on up to four bodies |
 //! | `island.rs` | union–find islands over dynamic bodies |
-//! | `assemble.rs` | per-island `A`, `b` from body-pair blocks; `v⁺ = v_free + M⁻¹Jᵀλ` |
+//! | `assemble.rs` | per-island `A`, `b` from body blocks; `v⁺ = v_free + M⁻¹Jᵀλ` |
 //! | `step.rs` | the time step and its integrator |
 //! | `projection.rs` | optional position projection (post-stabilization) |
-//! | `world.rs` | the world: settings, adding and validating items, queries |
+//! | `world.rs` | the world: settings (and the projection default), adding and validating items, controls |
+//! | `query.rs` | read access: coordinates, impulses, reactions, islands, momentum |
 //! | `stats.rs` | per-island statistics of a step |
 //! | `error.rs` | typed errors, one enum per operation |
 //!
@@ -55,27 +64,40 @@
 
 mod assemble;
 mod body;
+mod buoyancy;
+mod chain;
+mod coupling;
+mod coupling_rows;
 mod error;
 mod force;
 mod island;
 mod joint;
 mod joint_rows;
+mod motor;
 mod projection;
+mod query;
 mod rows;
 mod stats;
 mod step;
 mod world;
 
-pub use body::{BodyBuilder, BodyId, BodyKind, RigidBody, box_inertia, cylinder_inertia, sphere_inertia};
+pub use body::{
+    BodyBuilder, BodyId, BodyKind, RigidBody, box_inertia, capsule_inertia, cylinder_inertia, sphere_inertia,
+};
+pub use buoyancy::{Buoyancy, BuoyancyPoint, Water, Wave};
+pub use chain::{Chain, ChainBuilder, ChainEnd, ChainShape};
+pub use coupling::{Coupling, CouplingBuilder, CouplingId, CouplingKind};
 pub use error::{
-    BodyError, ControlError, ForceError, JointError, ModelError, SettingsError, StateError, StepError,
+    BodyError, ChainError, ControlError, CouplingError, ForceError, JointError, ModelError, SettingsError,
+    StateError, StepError,
 };
 pub use force::{ForceElement, ForceId, SpringDamper};
 pub use island::Islands;
 pub use joint::{
-    DEFAULT_COMPLIANCE, JOINT_SLOTS, Joint, JointBuilder, JointFrames, JointId, JointKind, JointLimit,
-    JointMotor, JointRow,
+    DEFAULT_COMPLIANCE, JOINT_SLOTS, Joint, JointBuilder, JointFrames, JointId, JointKind, JointRow,
 };
-pub use rows::{ConstraintRow, Jac6, RowKey, RowKind};
+pub use motor::{DEFAULT_POSITION_GAIN, FreeAxis, JointLimit, JointMotor, MotorMode, wrap_angle};
+pub use query::{JointFramesWorld, JointReaction};
+pub use rows::{ConstraintRow, Jac6, MAX_ROW_BODIES, RowKey, RowKind};
 pub use stats::IslandStats;
-pub use world::{JointFramesWorld, World, WorldSettings};
+pub use world::{World, WorldSettings};

@@ -20,7 +20,7 @@
 //! spring deflection instead of pulling it rigid; with `c → 0` the target is `φ = 0`. One iteration
 //! is a Gauss–Newton step on the constraint manifold: the residual drops from `O((hω)² r)` to
 //! `O((hω)⁴ r)`. The projection uses the same solver (with its own buffers), so limits stay
-//! unilateral; motors (velocity rows) take no part.
+//! unilateral; motors and couplings (velocity rows) take no part.
 //!
 //! **Costs** (measured in `tests/dynamics_*.rs`). One more row evaluation, assembly and solve per
 //! island per iteration. Velocities are left alone, so linear momentum is untouched, but they are no
@@ -85,11 +85,13 @@ pub(crate) fn project(
             push_joint_rows(j, &a, &b, h, &mut ws.proj_rows);
         }
         ws.proj_rows.retain(|r| r.kind == RowKind::Position);
-        for r in ws.proj_rows.iter_mut() {
-            let RowKey::Joint { joint, row } = r.key;
-            let w = &ws.warm[joint.index()][row.slot()];
+        for i in 0..ws.proj_rows.len() {
+            let r = ws.proj_rows[i];
+            let RowKey::Joint { joint, .. } = r.key else { continue };
+            let w = ws.warm_row(r.key).copied().unwrap_or_default();
             let lambda = if w.stamp == step + 1 { w.lambda } else { 0.0 };
-            r.rhs = -joints[joint.index()].stabilization * (r.phi + r.compliance * lambda / h) / h;
+            ws.proj_rows[i].rhs =
+                -joints[joint.index()].stabilization * (r.phi + r.compliance * lambda / h) / h;
         }
         ws.proj_islands.build(&ws.dynamic, &ws.proj_rows);
         ws.dv.clear();
@@ -113,16 +115,11 @@ pub(crate) fn project(
             ws.asm.lambda.clear();
             ws.asm.lambda.resize(m, 0.0);
             ws.proj_solvers[solved].solve(&ws.problem, &mut ws.asm.lambda);
-            ws.asm.apply_impulses(
-                k,
-                &ws.proj_islands,
-                &ws.proj_rows,
-                &ws.proj_motion,
-                &mut ws.dv,
-                &mut ws.dw,
-            );
-            // Same bodies, same joints: the projection islands are the velocity islands.
-            if let Some(&s) = ws.stat_of_island.get(k)
+            ws.asm.apply_impulses(k, &ws.proj_islands, &ws.proj_rows, &mut ws.dv, &mut ws.dw);
+            // A projection island lies within one velocity island (couplings, velocity rows, may
+            // join several projection islands into one): charge the time to that one.
+            let body = ws.proj_islands.bodies(k)[0];
+            if let Some(s) = ws.islands.island_of(body).and_then(|v| ws.stat_of_island.get(v).copied())
                 && let Some(st) = ws.stats.get_mut(s)
             {
                 st.projection_us += t.elapsed().as_secs_f64() * 1e6;

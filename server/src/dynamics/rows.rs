@@ -1,9 +1,14 @@
-//! Constraint rows: what the models (joints now, contacts later) hand to the island assembly.
+//! Constraint rows: what the models (joints, couplings and spring–dampers now, contacts later) hand
+//! to the island assembly.
 //!
-//! **One row** `i` couples at most two bodies A and B through Jacobian blocks `J_{i,A}, J_{i,B} ∈ ℝ^{1×6}`
-//! (linear part, angular part; world frame), so that `J_i v = J_{i,A} (v_A, ω_A) + J_{i,B} (v_B, ω_B)`.
-//! It carries a violation `φ_i`, a compliance `c_i ≥ 0`, impulse bounds `lo_i ≤ hi_i` and a
-//! friction index (`None` for joints). With the implicit step of paper eq. 1,
+//! **One row** `i` couples up to [`MAX_ROW_BODIES`] = 4 bodies `k` through Jacobian blocks
+//! `J_{i,k} ∈ ℝ^{1×6}` (linear part, angular part; world frame), so that
+//! `J_i v = Σ_k J_{i,k} (v_k, ω_k)`. A joint or spring row touches two bodies (block 0 is body A's,
+//! block 1 body B's); a coupling row (gear, differential, `coupling.rs`) touches the bodies of the
+//! joints it couples — up to four, each body once (blocks of the same body are summed when the row is
+//! built). The world frame takes no block (its velocity is zero). A row carries a violation `φ_i`, a
+//! compliance `c_i ≥ 0`, impulse bounds `lo_i ≤ hi_i` and a friction index (`None` for joints). With
+//! the implicit step of paper eq. 1,
 //!
 //! ```text
 //!   M v⁺ − Jᵀ λ = M v + h f                  (momentum; λ are impulses)
@@ -27,13 +32,20 @@
 //!   holds a 1e6 kg load at this analytic stretch to 1e-11 m).
 //!
 //! `β < 1` removes only the fraction `β` of the violation per step (Baumgarte-like), which softens
-//! the spring reading to `φ = −c F / β` at rest. Impulses `λ` act on B along `+J_B` and on A along
-//! `+J_A`; a row of a joint pulls the two bodies with equal and opposite forces at one point (see
+//! the spring reading to `φ = −c F / β` at rest; a spring–damper's force row (`force.rs`) is exactly
+//! such a row with `c = 1/(k + c_d/h)`, `β = k c`. A velocity row with compliance is a stiff damper:
+//! at steady state `J v⁺ = r − c λ / h² = r − c F / h`. Impulses `λ` act on body `k` along
+//! `+J_{i,k}`; a row of a joint pulls the two bodies with equal and opposite forces at one point (see
 //! `joint_rows.rs`), so constraint impulses conserve linear and angular momentum.
 
 use nalgebra::Vector3;
 
+use super::coupling::CouplingId;
+use super::force::ForceId;
 use super::joint::{JointId, JointRow};
+
+/// Most bodies one row touches (a differential couples three shafts hinged to one housing).
+pub const MAX_ROW_BODIES: usize = 4;
 
 /// Jacobian block of one row on one body: `J v = lin · v + ang · ω`.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
@@ -60,6 +72,11 @@ impl Jac6 {
     pub fn neg(&self) -> Self {
         Jac6 { lin: -self.lin, ang: -self.ang }
     }
+    /// `s J`.
+    #[inline]
+    pub fn scale(&self, s: f64) -> Self {
+        Jac6 { lin: self.lin * s, ang: self.ang * s }
+    }
 }
 
 /// What a row constrains: a position (stabilized by `−βφ/h`) or a velocity (target speed).
@@ -67,8 +84,11 @@ impl Jac6 {
 pub enum RowKind {
     /// Position-level row (locked axes, limits, later contact normals).
     Position,
-    /// Velocity-level row (motors, later friction).
+    /// Velocity-level row (motors, couplings, later friction).
     Velocity,
+    /// An implicit force element (spring–damper, `force.rs`): `φ` is its deflection, not a
+    /// violation; never projected.
+    Force,
 }
 
 /// Identity of a row that persists from step to step (warm start, reporting).
@@ -81,24 +101,25 @@ pub enum RowKey {
         /// Which of its rows.
         row: JointRow,
     },
+    /// The row of a coupling (gear, differential).
+    Coupling(CouplingId),
+    /// The row of a force element (spring–damper).
+    Force(ForceId),
 }
 
-/// One constraint row (solver side). Body indices are world body indices; `None` is the world frame
-/// (and a non-dynamic body is recognised through its kind at assembly).
+/// One constraint row (solver side). Body indices are world body indices; a `None` entry of
+/// `bodies` is an unused block (its Jacobian is zero). A non-dynamic body is recognised through its
+/// kind at assembly.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ConstraintRow {
     /// Persistent identity.
     pub key: RowKey,
     /// Position or velocity row.
     pub kind: RowKind,
-    /// Body A (world index), `None` for the world.
-    pub body_a: Option<usize>,
-    /// Body B (world index), `None` for the world.
-    pub body_b: Option<usize>,
-    /// Jacobian block on A.
-    pub j_a: Jac6,
-    /// Jacobian block on B.
-    pub j_b: Jac6,
+    /// Bodies touched (world indices), each at most once; joint rows: `[A, B, None, None]`.
+    pub bodies: [Option<usize>; MAX_ROW_BODIES],
+    /// Jacobian block on each body of `bodies` (zero where the body is `None`).
+    pub jac: [Jac6; MAX_ROW_BODIES],
     /// Violation `φ` (position rows; 0 for velocity rows).
     pub phi: f64,
     /// Right-hand side `r` of the row equation `J v⁺ + (c/h²) λ = r`.
@@ -111,4 +132,75 @@ pub struct ConstraintRow {
     pub hi: f64,
     /// Friction index: the (world) row index of the normal row (contacts; `None` for joints).
     pub findex: Option<usize>,
+}
+
+impl ConstraintRow {
+    /// A row of `kind` without blocks, `φ = r = c = 0`, unbounded.
+    pub fn new(key: RowKey, kind: RowKind) -> Self {
+        ConstraintRow {
+            key,
+            kind,
+            bodies: [None; MAX_ROW_BODIES],
+            jac: [Jac6::default(); MAX_ROW_BODIES],
+            phi: 0.0,
+            rhs: 0.0,
+            compliance: 0.0,
+            lo: f64::NEG_INFINITY,
+            hi: f64::INFINITY,
+            findex: None,
+        }
+    }
+
+    /// A two-body row with blocks `j_a` on `a` and `j_b` on `b` (`None`: the world, no block; the
+    /// slots stay `[a, b]` so that block 0 is always body A's).
+    pub fn pair(
+        key: RowKey,
+        kind: RowKind,
+        a: Option<usize>,
+        j_a: Jac6,
+        b: Option<usize>,
+        j_b: Jac6,
+    ) -> Self {
+        let mut r = Self::new(key, kind);
+        r.bodies[0] = a;
+        r.bodies[1] = b;
+        if a.is_some() {
+            r.jac[0] = j_a;
+        }
+        if b.is_some() {
+            r.jac[1] = j_b;
+        }
+        r
+    }
+
+    /// Adds `j` to the block of `body` (summing with an existing block of the same body; the world
+    /// takes none). Returns `false` if all [`MAX_ROW_BODIES`] slots hold other bodies.
+    pub fn add_block(&mut self, body: Option<usize>, j: Jac6) -> bool {
+        let Some(b) = body else { return true };
+        if let Some(s) = self.bodies.iter().position(|&x| x == Some(b)) {
+            self.jac[s].lin += j.lin;
+            self.jac[s].ang += j.ang;
+            return true;
+        }
+        match self.bodies.iter().position(Option::is_none) {
+            Some(s) => {
+                self.bodies[s] = Some(b);
+                self.jac[s] = j;
+                true
+            }
+            None => false,
+        }
+    }
+
+    /// The blocks `(body, J)` of the row.
+    #[inline]
+    pub fn blocks(&self) -> impl Iterator<Item = (usize, &Jac6)> + '_ {
+        self.bodies.iter().zip(self.jac.iter()).filter_map(|(b, j)| b.map(|b| (b, j)))
+    }
+
+    /// `J v` for velocities indexed like the world's bodies.
+    #[inline]
+    pub fn velocity(&self, v: &[Vector3<f64>], w: &[Vector3<f64>]) -> f64 {
+        self.blocks().map(|(b, j)| j.dot(&v[b], &w[b])).sum()
+    }
 }

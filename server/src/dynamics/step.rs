@@ -2,9 +2,14 @@
 //! velocity update and integration.
 //!
 //! ```text
-//!   1. f = m g + Σ force elements                      (explicit, at the start of the step)
-//!   2. v_free = v + h f / m,   ω_free = ω̃ + h I_w⁻¹ τ  (ω̃: implicit gyroscopic update, below)
-//!   3. rows of every joint at the current poses       (joint_rows.rs)
+//!   1. f = m g + Σ force elements at the start of the step (time t), with the Jacobians D, K of
+//!      the implicit ones (buoyancy and drag, force.rs)
+//!   2. v₀ = v/(1 + h d),  ω₀ = ω̃/(1 + h d_ω)          (ω̃: implicit gyroscopic update, below;
+//!                                                       d, d_ω: body damping rates, body.rs)
+//!      v_free = v₀ + h f / m,  ω_free = ω₀ + h I_w⁻¹ τ, or with implicit elements
+//!      (v_free, ω_free) = (v₀, ω₀) + (M − h D − h² K)⁻¹ (h f + h² K (v₀, ω₀))
+//!   3. rows of every joint, coupling and spring at the current poses
+//!                                                      (joint_rows.rs, coupling_rows.rs, force.rs)
 //!   4. islands by union–find over rows joining dynamic bodies
 //!   5. per island: A = J M⁻¹ Jᵀ + C/h², b = r − J v_free (eq. 2); solve the boxed MLCP (eq. 3)
 //!      warm-started from the previous step's index set and impulses of the same rows
@@ -41,11 +46,13 @@
 
 use std::time::Instant;
 
-use nalgebra::{UnitQuaternion, Vector3};
+use nalgebra::{Matrix6, UnitQuaternion, Vector3, Vector6};
 
 use super::assemble::{Assembler, BodyMotion};
 use super::body::{BodyKind, RigidBody};
+use super::coupling_rows::push_coupling_row;
 use super::error::StepError;
+use super::force::{ForceAccumulator, ForceElement, ForceId};
 use super::island::Islands;
 use super::joint::JOINT_SLOTS;
 use super::joint_rows::{Side, push_joint_rows};
@@ -54,7 +61,8 @@ use super::stats::IslandStats;
 use super::world::{World, WorldSettings};
 use crate::solver::{IndexState, Mlcp, Solver};
 
-/// Persistent state of one joint row slot: index state and impulse of the step it was last solved in.
+/// Persistent state of one row (a joint's slot or a coupling): index state and impulse of the step
+/// it was last solved in.
 #[derive(Debug, Clone, Copy, Default)]
 pub(crate) struct WarmRow {
     /// `World::steps` after the step that wrote it.
@@ -66,8 +74,7 @@ pub(crate) struct WarmRow {
 /// Reusable buffers of the step.
 #[derive(Debug, Default)]
 pub(crate) struct StepWorkspace {
-    pub force: Vec<Vector3<f64>>,
-    pub torque: Vec<Vector3<f64>>,
+    pub forces: ForceAccumulator,
     pub motion: Vec<BodyMotion>,
     pub dynamic: Vec<bool>,
     pub rows: Vec<ConstraintRow>,
@@ -81,6 +88,8 @@ pub(crate) struct StepWorkspace {
     pub x_new: Vec<Vector3<f64>>,
     pub q_new: Vec<UnitQuaternion<f64>>,
     pub warm: Vec<[WarmRow; JOINT_SLOTS]>,
+    pub warm_couplings: Vec<WarmRow>,
+    pub warm_forces: Vec<WarmRow>,
     pub stats: Vec<IslandStats>,
     /// Island index → index in `stats` (`usize::MAX` for islands without rows).
     pub stat_of_island: Vec<usize>,
@@ -115,6 +124,31 @@ fn gyroscopic(b: &RigidBody, h: f64) -> Vector3<f64> {
     if w.iter().all(|c| c.is_finite()) { b.orientation * w } else { b.angvel }
 }
 
+/// Unconstrained velocity change `(Δv, Δω)` of body `i` with implicit force elements: solves
+/// `(M − h D − h² K) Δ = h f + h² K (v₀, ω₀)` (`force.rs`); explicit `h M⁻¹ f` if singular.
+fn implicit_change(
+    b: &RigidBody,
+    acc: &ForceAccumulator,
+    i: usize,
+    h: f64,
+    v0: Vector3<f64>,
+    w0: Vector3<f64>,
+) -> (Vector3<f64>, Vector3<f64>) {
+    let mut m = Matrix6::zeros();
+    m.fixed_view_mut::<3, 3>(0, 0).fill_diagonal(b.mass());
+    m.fixed_view_mut::<3, 3>(3, 3).copy_from(&b.inertia_world());
+    let (d, k) = (&acc.damping[i], &acc.stiffness[i]);
+    let lhs = m - d * h - k * (h * h);
+    let vel = Vector6::new(v0.x, v0.y, v0.z, w0.x, w0.y, w0.z);
+    let f = acc.force[i];
+    let t = acc.torque[i];
+    let rhs = Vector6::new(f.x, f.y, f.z, t.x, t.y, t.z) * h + k * vel * (h * h);
+    match lhs.lu().solve(&rhs).filter(|x| x.iter().all(|c| c.is_finite())) {
+        Some(x) => (x.fixed_rows::<3>(0).into_owned(), x.fixed_rows::<3>(3).into_owned()),
+        None => (f * (h * b.inv_mass()), b.inv_inertia_world() * t * h),
+    }
+}
+
 /// Newton iterations of the gyroscopic update (converges in 2–4 for `h |ω|` up to ~1).
 const GYRO_ITERATIONS: usize = 8;
 
@@ -130,25 +164,32 @@ fn side_of(bodies: &[RigidBody], v: &[Vector3<f64>], w: &[Vector3<f64>], id: Opt
 }
 
 impl StepWorkspace {
+    /// The warm-start record of a row (`None` for an item the cache has not seen).
+    pub fn warm_row(&self, key: RowKey) -> Option<&WarmRow> {
+        match key {
+            RowKey::Joint { joint, row } => self.warm.get(joint.index()).map(|w| &w[row.slot()]),
+            RowKey::Coupling(c) => self.warm_couplings.get(c.index()),
+            RowKey::Force(f) => self.warm_forces.get(f.index()),
+        }
+    }
+
     /// Forces, free velocities and predicted velocities of every body (steps 1–2).
     fn prepare_bodies(
         &mut self,
         settings: &WorldSettings,
         bodies: &[RigidBody],
         forces: &[super::ForceElement],
+        time: f64,
     ) {
         let (h, n) = (settings.timestep, bodies.len());
-        self.force.clear();
-        self.force.resize(n, Vector3::zeros());
-        self.torque.clear();
-        self.torque.resize(n, Vector3::zeros());
+        self.forces.reset(n);
         for (i, b) in bodies.iter().enumerate() {
             if b.is_dynamic() {
-                self.force[i] = settings.gravity * b.mass();
+                self.forces.force[i] = settings.gravity * b.mass();
             }
         }
         for f in forces {
-            f.accumulate(bodies, &mut self.force, &mut self.torque);
+            f.accumulate(bodies, time, &settings.gravity, &mut self.forces);
         }
         self.motion.clear();
         self.dynamic.clear();
@@ -157,13 +198,16 @@ impl StepWorkspace {
                 BodyKind::Dynamic => {
                     let inv_inertia = b.inv_inertia_world();
                     let w0 = if settings.gyroscopic { gyroscopic(b, h) } else { b.angvel };
-                    BodyMotion {
-                        dynamic: true,
-                        inv_mass: b.inv_mass(),
-                        inv_inertia,
-                        v: b.linvel + self.force[i] * (h * b.inv_mass()),
-                        w: w0 + inv_inertia * self.torque[i] * h,
-                    }
+                    let (v0, w0) =
+                        (b.linvel / (1.0 + h * b.linear_damping()), w0 / (1.0 + h * b.angular_damping()));
+                    let (dv, dw) = match self.forces.implicit[i] {
+                        true => implicit_change(b, &self.forces, i, h, v0, w0),
+                        false => (
+                            self.forces.force[i] * (h * b.inv_mass()),
+                            inv_inertia * self.forces.torque[i] * h,
+                        ),
+                    };
+                    BodyMotion { dynamic: true, inv_mass: b.inv_mass(), inv_inertia, v: v0 + dv, w: w0 + dw }
                 }
                 BodyKind::Kinematic => BodyMotion { v: b.linvel, w: b.angvel, ..Default::default() },
                 BodyKind::Static => BodyMotion::default(),
@@ -192,8 +236,7 @@ impl StepWorkspace {
             if r.kind == RowKind::Position {
                 max_violation = max_violation.max(r.phi.abs());
             }
-            let RowKey::Joint { joint, row } = r.key;
-            let w = &self.warm[joint.index()][row.slot()];
+            let w = self.warm_row(r.key).copied().unwrap_or_default();
             let valid = step > 0 && w.stamp == step;
             self.asm.lambda0.push(if valid { w.lambda } else { 0.0 });
             self.asm.index0.push(if valid { w.state } else { IndexState::Free });
@@ -227,17 +270,19 @@ impl StepWorkspace {
             solve_us: s.total_us,
             projection_us: 0.0,
         };
-        self.asm.apply_impulses(k, &self.islands, &self.rows, &self.motion, &mut self.v_new, &mut self.w_new);
+        self.asm.apply_impulses(k, &self.islands, &self.rows, &mut self.v_new, &mut self.w_new);
         self.stat_of_island[k] = solved;
         self.stats.push(st);
         let states = self.solvers[solved].index_set();
         for (i, &ri) in self.islands.rows(k).iter().enumerate() {
-            let RowKey::Joint { joint, row } = self.rows[ri].key;
-            self.warm[joint.index()][row.slot()] = WarmRow {
-                stamp: step + 1,
-                state: states.get(i).copied().unwrap_or_default(),
-                lambda: self.asm.lambda[i],
+            let state = states.get(i).copied().unwrap_or_default();
+            let lambda = self.asm.lambda[i];
+            let slot = match self.rows[ri].key {
+                RowKey::Joint { joint, row } => &mut self.warm[joint.index()][row.slot()],
+                RowKey::Coupling(c) => &mut self.warm_couplings[c.index()],
+                RowKey::Force(f) => &mut self.warm_forces[f.index()],
             };
+            *slot = WarmRow { stamp: step + 1, state, lambda };
         }
         Ok(())
     }
@@ -248,7 +293,7 @@ impl World {
     pub fn step(&mut self) -> Result<(), StepError> {
         let h = self.settings.timestep;
         let ws = &mut self.ws;
-        ws.prepare_bodies(&self.settings, &self.bodies, &self.forces);
+        ws.prepare_bodies(&self.settings, &self.bodies, &self.forces, self.time);
 
         // 3–4. Rows and islands.
         ws.rows.clear();
@@ -257,8 +302,23 @@ impl World {
             let b = side_of(&self.bodies, &ws.v_new, &ws.w_new, j.body_b);
             push_joint_rows(j, &a, &b, h, &mut ws.rows);
         }
+        for c in &self.couplings {
+            let (bodies, v, w) = (&self.bodies, &ws.v_new, &ws.w_new);
+            let sides =
+                |j: &super::Joint| (side_of(bodies, v, w, Some(j.body_a)), side_of(bodies, v, w, j.body_b));
+            push_coupling_row(c, &self.joints, sides, h, &mut ws.rows);
+        }
+        for (i, f) in self.forces.iter().enumerate() {
+            if let ForceElement::SpringDamper(s) = f {
+                let a = side_of(&self.bodies, &ws.v_new, &ws.w_new, Some(s.body_a));
+                let b = side_of(&self.bodies, &ws.v_new, &ws.w_new, s.body_b);
+                s.push_row(ForceId(i as u32), &a, &b, h, &mut ws.rows);
+            }
+        }
         ws.islands.build(&ws.dynamic, &ws.rows);
         ws.warm.resize(self.joints.len(), [WarmRow::default(); JOINT_SLOTS]);
+        ws.warm_couplings.resize(self.couplings.len(), WarmRow::default());
+        ws.warm_forces.resize(self.forces.len(), WarmRow::default());
 
         // 5–6. One MLCP per island; v⁺ = v_free + M⁻¹ Jᵀ λ (bodies without rows keep v_free).
         ws.stats.clear();
