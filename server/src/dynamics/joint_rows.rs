@@ -309,7 +309,7 @@ mod tests {
                 .iter()
                 .map(|r| match r.key {
                     RowKey::Joint { row, .. } => row.slot(),
-                    RowKey::Coupling(_) | RowKey::Force(_) => unreachable!(),
+                    _ => unreachable!(),
                 })
                 .collect();
             slots.dedup();

@@ -25,6 +25,7 @@
 //! | `motor.rs` | free axes, limits, velocity and position-target motors |
 //! | `coupling.rs` | powertrain couplings: gear pairs, differentials, clutches |
 //! | `chain.rs` | chain/cable helper: segments joined by ball joints |
+//! | `contact/` | colliders, broad and narrow phase (parry3d-f64), contact and friction rows |
 //! | `rows.rs` | the constraint row handed to the assembly; the row equation and its signs |
 //! | `joint_rows.rs` | joint → rows: violations and Jacobians of each joint kind |
 //! | `coupling_rows.rs` | coupling → its velocity row on up to four bodies |
@@ -66,6 +67,7 @@ mod assemble;
 mod body;
 mod buoyancy;
 mod chain;
+mod contact;
 mod coupling;
 mod coupling_rows;
 mod error;
@@ -86,6 +88,10 @@ pub use body::{
 };
 pub use buoyancy::{Buoyancy, BuoyancyPoint, Water, Wave};
 pub use chain::{Chain, ChainBuilder, ChainEnd, ChainShape};
+pub use contact::{
+    Collider, ColliderBuilder, ColliderId, ContactError, ContactReport, ContactSettings,
+    DEFAULT_CONTACT_COMPLIANCE, Material, Shape,
+};
 pub use coupling::{Coupling, CouplingBuilder, CouplingId, CouplingKind};
 pub use error::{
     BodyError, ChainError, ControlError, CouplingError, ForceError, JointError, ModelError, SettingsError,

@@ -105,6 +105,16 @@ pub enum RowKey {
     Coupling(CouplingId),
     /// The row of a force element (spring–damper).
     Force(ForceId),
+    /// A row of a contact point (`contact/`): the collider pair, the parry feature ids of the point
+    /// on each collider (stable while the same features touch) and the row (0 normal, 1–2 friction).
+    Contact {
+        /// Collider indices (A, B).
+        colliders: [u32; 2],
+        /// Feature ids on A and on B.
+        features: [u32; 2],
+        /// 0: normal; 1, 2: friction along `t₁`, `t₂`.
+        row: u8,
+    },
 }
 
 /// One constraint row (solver side). Body indices are world body indices; a `None` entry of

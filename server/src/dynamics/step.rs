@@ -10,6 +10,7 @@
 //!      (v_free, ω_free) = (v₀, ω₀) + (M − h D − h² K)⁻¹ (h f + h² K (v₀, ω₀))
 //!   3. rows of every joint, coupling and spring at the current poses
 //!                                                      (joint_rows.rs, coupling_rows.rs, force.rs)
+//!      then of every contact point (contact/)
 //!   4. islands by union–find over rows joining dynamic bodies
 //!   5. per island: A = J M⁻¹ Jᵀ + C/h², b = r − J v_free (eq. 2); solve the boxed MLCP (eq. 3)
 //!      warm-started from the previous step's index set and impulses of the same rows
@@ -44,6 +45,7 @@
 //! problem is refilled in place ([`Mlcp::assign`](crate::solver::Mlcp::assign)): once the first
 //! steps of a scene have sized them, a step allocates nothing.
 
+use std::collections::HashMap;
 use std::time::Instant;
 
 use nalgebra::{Matrix6, UnitQuaternion, Vector3, Vector6};
@@ -90,6 +92,9 @@ pub(crate) struct StepWorkspace {
     pub warm: Vec<[WarmRow; JOINT_SLOTS]>,
     pub warm_couplings: Vec<WarmRow>,
     pub warm_forces: Vec<WarmRow>,
+    /// Contact rows by key (collider pair, feature ids, row); entries not solved in the last step
+    /// are dropped after it.
+    pub warm_contacts: HashMap<RowKey, WarmRow>,
     pub stats: Vec<IslandStats>,
     /// Island index → index in `stats` (`usize::MAX` for islands without rows).
     pub stat_of_island: Vec<usize>,
@@ -170,6 +175,7 @@ impl StepWorkspace {
             RowKey::Joint { joint, row } => self.warm.get(joint.index()).map(|w| &w[row.slot()]),
             RowKey::Coupling(c) => self.warm_couplings.get(c.index()),
             RowKey::Force(f) => self.warm_forces.get(f.index()),
+            RowKey::Contact { .. } => self.warm_contacts.get(&key),
         }
     }
 
@@ -281,6 +287,7 @@ impl StepWorkspace {
                 RowKey::Joint { joint, row } => &mut self.warm[joint.index()][row.slot()],
                 RowKey::Coupling(c) => &mut self.warm_couplings[c.index()],
                 RowKey::Force(f) => &mut self.warm_forces[f.index()],
+                key @ RowKey::Contact { .. } => self.warm_contacts.entry(key).or_default(),
             };
             *slot = WarmRow { stamp: step + 1, state, lambda };
         }
@@ -315,6 +322,7 @@ impl World {
                 s.push_row(ForceId(i as u32), &a, &b, h, &mut ws.rows);
             }
         }
+        self.contacts.push_rows(&self.bodies, &self.joints, h, &mut ws.rows);
         ws.islands.build(&ws.dynamic, &ws.rows);
         ws.warm.resize(self.joints.len(), [WarmRow::default(); JOINT_SLOTS]);
         ws.warm_couplings.resize(self.couplings.len(), WarmRow::default());
@@ -329,6 +337,8 @@ impl World {
                 ws.solve_island(&self.settings, k, self.steps)?;
             }
         }
+        let solved = self.steps + 1;
+        ws.warm_contacts.retain(|_, w| w.stamp == solved);
 
         // 7. Integration.
         ws.x_new.clear();

@@ -23,6 +23,7 @@ use std::collections::HashMap;
 use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
 
 use super::body::{BodyBuilder, BodyId, BodyKind, RigidBody};
+use super::contact::ContactSet;
 use super::coupling::{Coupling, CouplingBuilder, CouplingId, validate_max_torque};
 use super::error::{
     BodyError, ControlError, CouplingError, ForceError, JointError, SettingsError, StateError,
@@ -100,6 +101,8 @@ pub struct World {
     pub(crate) time: f64,
     pub(crate) steps: u64,
     pub(crate) ws: StepWorkspace,
+    /// Colliders, contact settings and the narrow phase (`contact/`).
+    pub(crate) contacts: ContactSet,
 }
 
 impl World {
@@ -119,6 +122,7 @@ impl World {
             time: 0.0,
             steps: 0,
             ws: StepWorkspace::default(),
+            contacts: ContactSet::default(),
         })
     }
 

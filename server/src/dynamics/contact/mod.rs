@@ -1,0 +1,479 @@
+//! Contacts with Coulomb friction (issue 5, first slice): colliders attached to bodies, broad and
+//! narrow phase through parry3d-f64, and the contact rows of the step.
+//!
+//! | file | concept |
+//! |---|---|
+//! | `convert.rs` | the one nalgebra ↔ glam boundary (parry 0.31 uses glam types) |
+//! | `shape.rs` | shapes (ball, cuboid, capsule, cylinder, convex hull, half-space), validation |
+//! | `collide.rs` | broad phase (all pairs, AABB overlap with the margin) and parry manifolds |
+//! | `rows.rs` | contact points → one normal and two friction rows each |
+//!
+//! **Rows** (`rows.rs`). Per contact point with normal `n` (from collider A to collider B) and gap
+//! `φ` (the signed distance, negative in penetration) one normal row `J v = n·(v_B(p) − v_A(p))`,
+//! `0 ≤ λ_n`, position kind with `r = −φ/h` for a gap inside the prediction margin (speculative
+//! contact: the bodies may close the gap in one step, not more) and `r = −β φ / h` in penetration
+//! (recovery of the fraction `β` per step); then two friction rows along an orthonormal tangent
+//! basis `t₁, t₂` with `findex` → the normal row and coefficients `±μ` (`|λ_t| ≤ μ λ_n` with the
+//! *final* `λ_n`, the box approximation of the Coulomb cone, paper §3). `t₁` follows the relative
+//! sliding velocity when it exceeds [`ContactSettings::sliding_speed`] (so a sliding contact meets
+//! the exact Coulomb force `μ λ_n` against its motion), otherwise a deterministic completion of `n`.
+//!
+//! **Warm start.** A row's key is [`RowKey::Contact`](super::RowKey) with the collider pair and the
+//! parry feature ids of the point, so a contact that persists (same features) is warm-started from
+//! its last index state and impulse like a joint row.
+//!
+//! **Filtering.** Pairs on the same body, pairs without a dynamic body and pairs of bodies joined by
+//! a joint do not collide. `μ` of a pair is the geometric mean of the two materials' (default 1.0)
+//! unless the pair has its own ([`World::set_pair_friction`]).
+//!
+//! **Compliance.** Normal and friction rows carry [`ContactSettings::compliance`] (default 1e-10 m/N,
+//! as joints): it keeps the redundant rows of a resting box (4 points, 12 rows for 6 dofs) regular
+//! for the pivoting solver. Its price: a resting contact sinks by `c F / β` (µm under tonnes), and a
+//! sticking friction row, a velocity row, creeps at `c λ_t / h²` (1e-7 m over 10 s for a 1.5 kg box
+//! on a 30° slope, `tests/dynamics_contact_ground.rs`); a position-level friction anchor would
+//! remove it.
+//!
+//! **Allocation.** Pair caches, the point list and the warm-start map are reused: a step whose
+//! contacts persist allocates nothing (`tests/dynamics_contact_allocation.rs`); a new pair or a new
+//! feature pair allocates once.
+//!
+//! **Not yet** (issue 5): compound shapes, triangle-mesh and heightfield terrain, collision
+//! groups/filters and an opt-in for jointed pairs, a BVH or sweep-and-prune broad phase (all pairs
+//! now), a material-pair table (per collider pair now). parry's cuboid–cuboid clipping sometimes
+//! returns 2 instead of 4 points for two equal, exactly aligned boxes (a stack of equal boxes stands,
+//! drifting ~1e-6 m over 20 s; the tests use boxes 1 cm narrower per level).
+//!
+//! ```
+//! use nalgebra::Vector3;
+//! use pivotsim_server::dynamics::{BodyBuilder, ColliderBuilder, Shape, World, WorldSettings, box_inertia};
+//!
+//! let mut world = World::new(WorldSettings::default())?;
+//! let ground = world.add_body(BodyBuilder::static_body("ground"))?;
+//! world.add_collider(ColliderBuilder::new("ground", ground, Shape::HalfSpace { normal: Vector3::z() }))?;
+//! let e = Vector3::new(0.2, 0.2, 0.1);
+//! let crate_ = world.add_body(BodyBuilder::dynamic("crate", 2.0, box_inertia(2.0, e)).position(Vector3::new(0.0, 0.0, 0.1)))?;
+//! world.add_collider(ColliderBuilder::new("crate", crate_, Shape::Cuboid { half_extents: e }).friction(0.6))?;
+//! for _ in 0..60 {
+//!     world.step()?;
+//! }
+//! // Four corners carry the weight: Σ λ_n = m g h.
+//! let h = world.settings().timestep;
+//! let sum: f64 = world.contacts().map(|c| c.normal_impulse).sum();
+//! assert_eq!(world.contacts().count(), 4);
+//! assert!((sum - 2.0 * 9.81 * h).abs() < 1e-9);
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
+
+mod collide;
+mod convert;
+mod rows;
+mod shape;
+
+use std::collections::HashMap;
+
+use nalgebra::{Isometry3, Vector3};
+use parry3d_f64::shape::SharedShape;
+use thiserror::Error;
+
+pub use shape::Shape;
+
+use super::body::{BodyId, RigidBody};
+use super::joint::Joint;
+use super::rows::{ConstraintRow, RowKey};
+use super::world::World;
+
+/// Default compliance of contact rows (m/N), as joints'.
+pub const DEFAULT_CONTACT_COMPLIANCE: f64 = 1e-10;
+
+/// Id of a collider (index in creation order).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct ColliderId(pub u32);
+
+impl ColliderId {
+    /// Index in the world's collider list.
+    pub fn index(self) -> usize {
+        self.0 as usize
+    }
+}
+
+/// Surface material.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Material {
+    /// Coulomb friction coefficient `μ ≥ 0` (paper Table 1: 1.0).
+    pub friction: f64,
+}
+
+impl Default for Material {
+    fn default() -> Self {
+        Material { friction: 1.0 }
+    }
+}
+
+/// Contact settings of a world.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ContactSettings {
+    /// Prediction margin (m): pairs closer than this get (speculative) contact rows.
+    pub margin: f64,
+    /// Compliance of normal and friction rows (m/N); > 0 keeps redundant contacts regular.
+    pub compliance: f64,
+    /// Fraction `β ∈ (0, 1]` of a penetration removed per step.
+    pub stabilization: f64,
+    /// Relative tangential speed (m/s) above which `t₁` follows the sliding direction.
+    pub sliding_speed: f64,
+}
+
+impl Default for ContactSettings {
+    fn default() -> Self {
+        ContactSettings {
+            margin: 0.01,
+            compliance: DEFAULT_CONTACT_COMPLIANCE,
+            stabilization: 0.2,
+            sliding_speed: 1e-3,
+        }
+    }
+}
+
+/// Errors of adding a collider or changing the contact settings; degenerate shapes are refused here.
+#[derive(Debug, Clone, PartialEq, Error)]
+pub enum ContactError {
+    /// Colliders need a non-empty name.
+    #[error("a collider needs a non-empty name")]
+    EmptyName,
+    /// Another collider has this name.
+    #[error("collider '{collider}': the name is already taken")]
+    DuplicateName {
+        /// The name.
+        collider: String,
+    },
+    /// The body does not exist.
+    #[error("collider '{collider}': unknown body {body:?}")]
+    UnknownBody {
+        /// Collider name.
+        collider: String,
+        /// The id given.
+        body: BodyId,
+    },
+    /// A size is zero, negative, NaN or infinite.
+    #[error("collider '{collider}': {what} must be finite and > 0 (got {value})")]
+    InvalidSize {
+        /// Collider name.
+        collider: String,
+        /// Which size.
+        what: &'static str,
+        /// The value.
+        value: f64,
+    },
+    /// A hull vertex is NaN or infinite.
+    #[error("collider '{collider}': vertex {index} is not finite")]
+    NonFiniteVertex {
+        /// Collider name.
+        collider: String,
+        /// Vertex index.
+        index: usize,
+    },
+    /// The hull's points do not span a volume (fewer than 4, or coplanar).
+    #[error("collider '{collider}': the {points} hull points do not span a volume")]
+    DegenerateHull {
+        /// Collider name.
+        collider: String,
+        /// Number of points.
+        points: usize,
+    },
+    /// A half-space normal is not unit.
+    #[error("collider '{collider}': the half-space normal must be unit (norm {norm})")]
+    NonUnitNormal {
+        /// Collider name.
+        collider: String,
+        /// Its norm.
+        norm: f64,
+    },
+    /// An unbounded shape (half-space) on a dynamic body.
+    #[error("collider '{collider}': a {shape} needs a static or kinematic body")]
+    UnboundedOnDynamic {
+        /// Collider name.
+        collider: String,
+        /// The shape kind.
+        shape: &'static str,
+    },
+    /// The friction coefficient is negative or not finite.
+    #[error("collider '{collider}': friction must be finite and ≥ 0 (got {value})")]
+    InvalidFriction {
+        /// Collider name.
+        collider: String,
+        /// The value.
+        value: f64,
+    },
+    /// The offset has a non-finite translation or a non-unit rotation.
+    #[error("collider '{collider}': invalid offset")]
+    InvalidOffset {
+        /// Collider name.
+        collider: String,
+    },
+    /// The collider does not exist.
+    #[error("unknown collider {0:?}")]
+    UnknownCollider(ColliderId),
+    /// A contact setting is out of range.
+    #[error("contact setting {what} out of range (got {value})")]
+    InvalidSetting {
+        /// Which setting.
+        what: &'static str,
+        /// The value.
+        value: f64,
+    },
+}
+
+/// Builder of a collider: a shape and material attached to a body at an offset.
+#[derive(Debug, Clone)]
+pub struct ColliderBuilder {
+    name: String,
+    body: BodyId,
+    shape: Shape,
+    offset: Isometry3<f64>,
+    material: Material,
+}
+
+impl ColliderBuilder {
+    /// A collider `name` of `shape` on `body`, at the body's frame, default material.
+    pub fn new(name: &str, body: BodyId, shape: Shape) -> Self {
+        ColliderBuilder {
+            name: name.to_string(),
+            body,
+            shape,
+            offset: Isometry3::identity(),
+            material: Material::default(),
+        }
+    }
+    /// The collider's pose in the body frame.
+    pub fn offset(mut self, offset: Isometry3<f64>) -> Self {
+        self.offset = offset;
+        self
+    }
+    /// The material.
+    pub fn material(mut self, material: Material) -> Self {
+        self.material = material;
+        self
+    }
+    /// The friction coefficient.
+    pub fn friction(mut self, mu: f64) -> Self {
+        self.material.friction = mu;
+        self
+    }
+}
+
+/// A collider of the world.
+#[derive(Debug, Clone)]
+pub struct Collider {
+    pub(crate) name: String,
+    pub(crate) body: BodyId,
+    pub(crate) shape: Shape,
+    pub(crate) material: Material,
+    /// Pose of parry's shape frame in the body frame (offset ∘ shape rotation).
+    pub(crate) local: Isometry3<f64>,
+    pub(crate) parry: SharedShape,
+}
+
+impl Collider {
+    /// Name.
+    pub fn name(&self) -> &str {
+        &self.name
+    }
+    /// The body it is attached to.
+    pub fn body(&self) -> BodyId {
+        self.body
+    }
+    /// Its shape.
+    pub fn shape(&self) -> &Shape {
+        &self.shape
+    }
+    /// Its material.
+    pub fn material(&self) -> Material {
+        self.material
+    }
+}
+
+/// The contact state of a world: colliders, settings, pair caches, the last step's points.
+#[derive(Debug, Default)]
+pub(crate) struct ContactSet {
+    pub colliders: Vec<Collider>,
+    pub names: HashMap<String, ColliderId>,
+    pub settings: ContactSettings,
+    /// Friction coefficients set per collider pair `(lower index, higher index)`.
+    pub pair_friction: HashMap<(u32, u32), f64>,
+    pub phase: collide::NarrowPhase,
+}
+
+impl ContactSet {
+    /// The step's hook: finds the contact points at the current poses and appends their rows.
+    pub fn push_rows(
+        &mut self,
+        bodies: &[RigidBody],
+        joints: &[Joint],
+        h: f64,
+        rows: &mut Vec<ConstraintRow>,
+    ) {
+        if self.colliders.is_empty() {
+            return;
+        }
+        self.phase.update(&self.colliders, &self.pair_friction, bodies, joints, self.settings.margin);
+        rows::push_contact_rows(&mut self.phase.points, bodies, &self.settings, h, rows);
+    }
+}
+
+/// One contact point of the last step with its impulses.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ContactReport {
+    /// Collider A (the normal points from A to B).
+    pub collider_a: ColliderId,
+    /// Collider B.
+    pub collider_b: ColliderId,
+    /// Contact point on A (world).
+    pub point_a: Vector3<f64>,
+    /// Contact point on B (world).
+    pub point_b: Vector3<f64>,
+    /// Unit normal from A to B (world).
+    pub normal: Vector3<f64>,
+    /// Signed gap (m), negative in penetration.
+    pub gap: f64,
+    /// Normal impulse on B (N s; A receives the opposite).
+    pub normal_impulse: f64,
+    /// Friction impulses on B along `tangents` (N s).
+    pub friction_impulse: [f64; 2],
+    /// The tangent basis used.
+    pub tangents: [Vector3<f64>; 2],
+}
+
+impl World {
+    /// Adds a collider (validated; degenerate shapes are refused with a typed error).
+    pub fn add_collider(&mut self, cb: ColliderBuilder) -> Result<ColliderId, ContactError> {
+        let name = || cb.name.clone();
+        if cb.name.is_empty() {
+            return Err(ContactError::EmptyName);
+        }
+        if self.contacts.names.contains_key(&cb.name) {
+            return Err(ContactError::DuplicateName { collider: name() });
+        }
+        let body = self
+            .bodies
+            .get(cb.body.index())
+            .ok_or(ContactError::UnknownBody { collider: name(), body: cb.body })?;
+        if cb.shape.is_unbounded() && body.is_dynamic() {
+            return Err(ContactError::UnboundedOnDynamic { collider: name(), shape: cb.shape.kind_name() });
+        }
+        let mu = cb.material.friction;
+        if !(mu.is_finite() && mu >= 0.0) {
+            return Err(ContactError::InvalidFriction { collider: name(), value: mu });
+        }
+        let q = cb.offset.rotation.into_inner();
+        let qn = q.norm();
+        if !cb.offset.translation.vector.iter().all(|c| c.is_finite())
+            || !qn.is_finite()
+            || (qn - 1.0).abs() > 1e-6
+        {
+            return Err(ContactError::InvalidOffset { collider: name() });
+        }
+        let (parry, rot) = cb.shape.build(&cb.name)?;
+        let id = ColliderId(self.contacts.colliders.len() as u32);
+        self.contacts.names.insert(cb.name.clone(), id);
+        self.contacts.colliders.push(Collider {
+            name: cb.name,
+            body: cb.body,
+            shape: cb.shape,
+            material: cb.material,
+            local: shape::parry_offset(&cb.offset, &rot),
+            parry,
+        });
+        Ok(id)
+    }
+
+    /// The colliders.
+    pub fn colliders(&self) -> &[Collider] {
+        &self.contacts.colliders
+    }
+
+    /// A collider by name.
+    pub fn collider_id(&self, name: &str) -> Option<ColliderId> {
+        self.contacts.names.get(name).copied()
+    }
+
+    /// Sets (`Some(μ)`) or clears (`None`: back to the geometric mean of the materials) the friction
+    /// coefficient of the pair `a`, `b`; it applies from the next step.
+    pub fn set_pair_friction(
+        &mut self,
+        a: ColliderId,
+        b: ColliderId,
+        mu: Option<f64>,
+    ) -> Result<(), ContactError> {
+        for id in [a, b] {
+            if id.index() >= self.contacts.colliders.len() {
+                return Err(ContactError::UnknownCollider(id));
+            }
+        }
+        let key = (a.0.min(b.0), a.0.max(b.0));
+        match mu {
+            Some(mu) if mu.is_finite() && mu >= 0.0 => {
+                self.contacts.pair_friction.insert(key, mu);
+            }
+            Some(mu) => {
+                let name = format!(
+                    "{}/{}",
+                    self.contacts.colliders[a.index()].name,
+                    self.contacts.colliders[b.index()].name
+                );
+                return Err(ContactError::InvalidFriction { collider: name, value: mu });
+            }
+            None => {
+                self.contacts.pair_friction.remove(&key);
+            }
+        }
+        Ok(())
+    }
+
+    /// Contact settings.
+    pub fn contact_settings(&self) -> ContactSettings {
+        self.contacts.settings
+    }
+
+    /// Changes the contact settings (validated).
+    pub fn set_contact_settings(&mut self, s: ContactSettings) -> Result<(), ContactError> {
+        let bad = |what, value| Err(ContactError::InvalidSetting { what, value });
+        if !(s.margin.is_finite() && s.margin >= 0.0) {
+            return bad("margin", s.margin);
+        }
+        if !(s.compliance.is_finite() && s.compliance >= 0.0) {
+            return bad("compliance", s.compliance);
+        }
+        if !(s.stabilization > 0.0 && s.stabilization <= 1.0) {
+            return bad("stabilization", s.stabilization);
+        }
+        if !(s.sliding_speed.is_finite() && s.sliding_speed >= 0.0) {
+            return bad("sliding_speed", s.sliding_speed);
+        }
+        self.contacts.settings = s;
+        Ok(())
+    }
+
+    /// The contact points of the last step with their impulses (zero impulses before the first
+    /// step or for a point whose island was not solved).
+    pub fn contacts(&self) -> impl Iterator<Item = ContactReport> + '_ {
+        self.contacts.phase.points.iter().map(move |p| {
+            let lambda = |row: u8| {
+                let key = RowKey::Contact { colliders: [p.ca, p.cb], features: p.features, row };
+                self.ws
+                    .warm_row(key)
+                    .filter(|w| self.steps > 0 && w.stamp == self.steps)
+                    .map_or(0.0, |w| w.lambda)
+            };
+            ContactReport {
+                collider_a: ColliderId(p.ca),
+                collider_b: ColliderId(p.cb),
+                point_a: p.pa,
+                point_b: p.pb,
+                normal: p.n,
+                gap: p.dist,
+                normal_impulse: lambda(0),
+                friction_impulse: [lambda(1), lambda(2)],
+                tangents: p.t,
+            }
+        })
+    }
+}

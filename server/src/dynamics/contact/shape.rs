@@ -1,0 +1,159 @@
+//! Collision shapes in the dynamics' conventions (nalgebra, SI, body-frame, axial shapes along the
+//! body `z` axis like [`capsule_inertia`](crate::dynamics::capsule_inertia) and
+//! [`cylinder_inertia`](crate::dynamics::cylinder_inertia)), their validation, and their parry
+//! counterpart.
+
+use nalgebra::{Isometry3, UnitQuaternion, Vector3};
+use parry3d_f64::shape::SharedShape;
+
+use super::ContactError;
+use super::convert::to_vec;
+
+/// A collision shape, in its collider's frame.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Shape {
+    /// A ball of this radius about the origin.
+    Ball {
+        /// Radius (m).
+        radius: f64,
+    },
+    /// A box with these half extents along x, y, z.
+    Cuboid {
+        /// Half extents (m).
+        half_extents: Vector3<f64>,
+    },
+    /// A capsule along `z`: the segment `z ∈ [−half_length, half_length]` swept by a ball.
+    Capsule {
+        /// Radius (m).
+        radius: f64,
+        /// Half length of the axis segment (m); 0 gives a ball.
+        half_length: f64,
+    },
+    /// A solid cylinder along `z`.
+    Cylinder {
+        /// Radius (m).
+        radius: f64,
+        /// Half length (m).
+        half_length: f64,
+    },
+    /// The convex hull of these points (at least 4, not coplanar).
+    ConvexHull {
+        /// Vertices (m).
+        points: Vec<Vector3<f64>>,
+    },
+    /// The half-space `n · x ≤ 0` (flat ground); only on static or kinematic bodies.
+    HalfSpace {
+        /// Outward unit normal (collider frame).
+        normal: Vector3<f64>,
+    },
+}
+
+impl Shape {
+    /// Short name of the kind.
+    pub fn kind_name(&self) -> &'static str {
+        match self {
+            Shape::Ball { .. } => "ball",
+            Shape::Cuboid { .. } => "cuboid",
+            Shape::Capsule { .. } => "capsule",
+            Shape::Cylinder { .. } => "cylinder",
+            Shape::ConvexHull { .. } => "convex hull",
+            Shape::HalfSpace { .. } => "half-space",
+        }
+    }
+
+    /// Whether the shape has infinite extent (needs a non-dynamic body).
+    pub fn is_unbounded(&self) -> bool {
+        matches!(self, Shape::HalfSpace { .. })
+    }
+
+    /// Validates the shape and builds its parry counterpart with the rotation from the collider
+    /// frame to parry's shape frame (parry's cylinder is along `y`).
+    pub(crate) fn build(&self, collider: &str) -> Result<(SharedShape, UnitQuaternion<f64>), ContactError> {
+        let size = |what: &'static str, value: f64, zero_ok: bool| {
+            let ok = value.is_finite() && (value > 0.0 || (zero_ok && value == 0.0));
+            if ok {
+                Ok(value)
+            } else {
+                Err(ContactError::InvalidSize { collider: collider.to_string(), what, value })
+            }
+        };
+        let id = UnitQuaternion::identity();
+        Ok(match self {
+            Shape::Ball { radius } => (SharedShape::ball(size("radius", *radius, false)?), id),
+            Shape::Cuboid { half_extents: e } => {
+                let (x, y, z) = (
+                    size("half extent x", e.x, false)?,
+                    size("half extent y", e.y, false)?,
+                    size("half extent z", e.z, false)?,
+                );
+                (SharedShape::cuboid(x, y, z), id)
+            }
+            Shape::Capsule { radius, half_length } => {
+                let r = size("radius", *radius, false)?;
+                let l = size("half length", *half_length, true)?;
+                (SharedShape::capsule_z(l, r), id)
+            }
+            Shape::Cylinder { radius, half_length } => {
+                let r = size("radius", *radius, false)?;
+                let l = size("half length", *half_length, false)?;
+                // parry's cylinder is along y; a rotation of +90° about x carries y to z.
+                let rot = UnitQuaternion::from_axis_angle(&Vector3::x_axis(), std::f64::consts::FRAC_PI_2);
+                (SharedShape::cylinder(l, r), rot)
+            }
+            Shape::ConvexHull { points } => {
+                for (index, p) in points.iter().enumerate() {
+                    if !p.iter().all(|c| c.is_finite()) {
+                        return Err(ContactError::NonFiniteVertex { collider: collider.to_string(), index });
+                    }
+                }
+                if !spans_volume(points) {
+                    return Err(ContactError::DegenerateHull {
+                        collider: collider.to_string(),
+                        points: points.len(),
+                    });
+                }
+                let pts: Vec<_> = points.iter().map(to_vec).collect();
+                let hull = SharedShape::convex_hull(&pts).ok_or_else(|| ContactError::DegenerateHull {
+                    collider: collider.to_string(),
+                    points: points.len(),
+                })?;
+                (hull, id)
+            }
+            Shape::HalfSpace { normal } => {
+                let norm = normal.norm();
+                if !(norm.is_finite() && (norm - 1.0).abs() <= 1e-6) {
+                    return Err(ContactError::NonUnitNormal { collider: collider.to_string(), norm });
+                }
+                (SharedShape::halfspace(to_vec(&(normal / norm))), id)
+            }
+        })
+    }
+}
+
+/// Whether the points span a volume (a tetrahedron of relative volume > 1e-9 exists): the far
+/// point from the first, the far point from that line, the far point from that plane.
+fn spans_volume(points: &[Vector3<f64>]) -> bool {
+    let Some(&p0) = points.first() else { return false };
+    let far = |f: &dyn Fn(&Vector3<f64>) -> f64| {
+        points.iter().copied().max_by(|a, b| f(a).total_cmp(&f(b))).unwrap_or(p0)
+    };
+    let p1 = far(&|p| (p - p0).norm());
+    let scale = (p1 - p0).norm();
+    if scale <= 0.0 {
+        return false;
+    }
+    let d = (p1 - p0) / scale;
+    let p2 = far(&|p| (p - p0).cross(&d).norm());
+    let n = (p2 - p0).cross(&d);
+    if n.norm() <= 1e-9 * scale {
+        return false;
+    }
+    let n = n.normalize();
+    let p3 = far(&|p| (p - p0).dot(&n).abs());
+    (p3 - p0).dot(&n).abs() > 1e-9 * scale
+}
+
+/// The collider's pose in its body's frame composed with the shape's parry rotation.
+pub(crate) fn parry_offset(offset: &Isometry3<f64>, rot: &UnitQuaternion<f64>) -> Isometry3<f64> {
+    offset * Isometry3::from_parts(nalgebra::Translation3::identity(), *rot)
+}
