@@ -6,40 +6,15 @@
 //! slipping clutch (rows on three and four bodies), a spring–damper row, a buoyant float with waves
 //! (the implicit 6 × 6 solve) and a cable from the chain helper.
 
-use std::alloc::{GlobalAlloc, Layout, System};
-use std::sync::atomic::{AtomicUsize, Ordering};
-
 use nalgebra::Vector3;
 use pivotsim_server::dynamics::{
     BodyBuilder, Buoyancy, ChainBuilder, ChainEnd, CouplingBuilder, ForceElement, FreeAxis, JointBuilder,
     JointLimit, JointMotor, SpringDamper, Water, Wave, World, WorldSettings, box_inertia, sphere_inertia,
 };
 
-struct Counting;
-
-static ALLOCS: AtomicUsize = AtomicUsize::new(0);
-
-// SAFETY: forwards to the system allocator; only counts.
-#[allow(unsafe_code)]
-unsafe impl GlobalAlloc for Counting {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        ALLOCS.fetch_add(1, Ordering::Relaxed);
-        // SAFETY: same contract as the caller's.
-        unsafe { System.alloc(layout) }
-    }
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        // SAFETY: same contract as the caller's.
-        unsafe { System.dealloc(ptr, layout) }
-    }
-    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
-        ALLOCS.fetch_add(1, Ordering::Relaxed);
-        // SAFETY: same contract as the caller's.
-        unsafe { System.realloc(ptr, layout, new_size) }
-    }
-}
-
-#[global_allocator]
-static GLOBAL: Counting = Counting;
+#[path = "support/counting_alloc.rs"]
+mod counting_alloc;
+use counting_alloc::allocations;
 
 /// `chains` chains of `links` links hanging from a static ceiling (one island each).
 fn scene(chains: usize, links: usize, projection: usize) -> World {
@@ -181,11 +156,11 @@ fn allocations_per_step(w: &mut World) -> (f64, usize) {
         w.step().unwrap();
     }
     let steps = 20;
-    let before = ALLOCS.load(Ordering::Relaxed);
+    let before = allocations();
     for _ in 0..steps {
         w.step().unwrap();
     }
-    let per_step = (ALLOCS.load(Ordering::Relaxed) - before) as f64 / steps as f64;
+    let per_step = (allocations() - before) as f64 / steps as f64;
     let solves = w.island_stats().len() * (1 + w.settings().projection_iterations);
     (per_step, solves)
 }

@@ -3,40 +3,15 @@
 //! half-space ground. parry's manifolds and workspaces are cached per pair and the contact
 //! warm-start map keeps its keys, so a step with persistent contacts allocates nothing.
 
-use std::alloc::{GlobalAlloc, Layout, System};
-use std::sync::atomic::{AtomicUsize, Ordering};
-
 use nalgebra::Vector3;
 use pivotsim_server::dynamics::{
     BodyBuilder, ColliderBuilder, Shape, World, WorldSettings, box_inertia, capsule_inertia,
     cylinder_inertia, sphere_inertia,
 };
 
-struct Counting;
-
-static ALLOCS: AtomicUsize = AtomicUsize::new(0);
-
-// SAFETY: forwards to the system allocator; only counts.
-#[allow(unsafe_code)]
-unsafe impl GlobalAlloc for Counting {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        ALLOCS.fetch_add(1, Ordering::Relaxed);
-        // SAFETY: same contract as the caller's.
-        unsafe { System.alloc(layout) }
-    }
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        // SAFETY: same contract as the caller's.
-        unsafe { System.dealloc(ptr, layout) }
-    }
-    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
-        ALLOCS.fetch_add(1, Ordering::Relaxed);
-        // SAFETY: same contract as the caller's.
-        unsafe { System.realloc(ptr, layout, new_size) }
-    }
-}
-
-#[global_allocator]
-static GLOBAL: Counting = Counting;
+#[path = "support/counting_alloc.rs"]
+mod counting_alloc;
+use counting_alloc::allocations;
 
 fn scene() -> World {
     let mut w = World::new(WorldSettings::default()).unwrap();
@@ -82,11 +57,11 @@ fn resting_contacts_allocate_nothing_once_warm() {
         w.step().unwrap();
     }
     let steps = 20;
-    let before = ALLOCS.load(Ordering::Relaxed);
+    let before = allocations();
     for _ in 0..steps {
         w.step().unwrap();
     }
-    let per_step = (ALLOCS.load(Ordering::Relaxed) - before) as f64 / steps as f64;
+    let per_step = (allocations() - before) as f64 / steps as f64;
     let points = w.contacts().count();
     let rows: usize = w.island_stats().iter().map(|s| s.rows).sum();
     println!("contact scene: {per_step} allocations per step, {points} contact points, {rows} rows");

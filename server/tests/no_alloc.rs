@@ -4,36 +4,11 @@
 
 mod common;
 
-use std::alloc::{GlobalAlloc, Layout, System};
-use std::sync::atomic::{AtomicUsize, Ordering};
-
 use pivotsim_server::solver::{Solver, SolverOptions, Variant};
 
-struct Counting;
-
-static ALLOCS: AtomicUsize = AtomicUsize::new(0);
-
-// SAFETY: forwards to the system allocator; only counts.
-#[allow(unsafe_code)]
-unsafe impl GlobalAlloc for Counting {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        ALLOCS.fetch_add(1, Ordering::Relaxed);
-        // SAFETY: same contract as the caller's.
-        unsafe { System.alloc(layout) }
-    }
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        // SAFETY: same contract as the caller's.
-        unsafe { System.dealloc(ptr, layout) }
-    }
-    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
-        ALLOCS.fetch_add(1, Ordering::Relaxed);
-        // SAFETY: same contract as the caller's.
-        unsafe { System.realloc(ptr, layout, new_size) }
-    }
-}
-
-#[global_allocator]
-static GLOBAL: Counting = Counting;
+#[path = "support/counting_alloc.rs"]
+mod counting_alloc;
+use counting_alloc::allocations;
 
 #[test]
 fn second_solve_allocates_nothing() {
@@ -50,13 +25,13 @@ fn second_solve_allocates_nothing() {
         for v in Variant::ALL {
             let mut s = Solver::new(SolverOptions { variant: v, max_steps: 1000, ..Default::default() });
             let mut lam = vec![0.0; p.n()];
-            let first = ALLOCS.load(Ordering::Relaxed);
+            let first = allocations();
             s.solve(p, &mut lam);
-            assert!(ALLOCS.load(Ordering::Relaxed) > first, "{v}: the first solve must size the workspace");
-            let before = ALLOCS.load(Ordering::Relaxed);
+            assert!(allocations() > first, "{v}: the first solve must size the workspace");
+            let before = allocations();
             let st = s.solve(p, &mut lam);
             let steps = st.pivot_steps;
-            let after = ALLOCS.load(Ordering::Relaxed);
+            let after = allocations();
             assert_eq!(
                 after - before,
                 0,
