@@ -207,6 +207,8 @@ pub struct JointBuilder {
     /// Per free axis ([`FreeAxis::index`]).
     pub(crate) limits: [Option<JointLimit>; 2],
     pub(crate) motors: [Option<JointMotor>; 2],
+    /// Whether the joined bodies' colliders collide with each other (default false).
+    pub(crate) collide_connected: bool,
 }
 
 impl JointBuilder {
@@ -228,6 +230,7 @@ impl JointBuilder {
             stabilization: 1.0,
             limits: [None; 2],
             motors: [None; 2],
+            collide_connected: false,
         }
     }
 
@@ -334,6 +337,13 @@ impl JointBuilder {
     /// Motor on a given free axis.
     pub fn axis_motor(mut self, axis: FreeAxis, motor: JointMotor) -> Self {
         self.motors[axis.index()] = Some(motor);
+        self
+    }
+
+    /// Whether the colliders of the two joined bodies collide with each other (default `false`:
+    /// jointed bodies do not collide).
+    pub fn collide_connected(mut self, collide: bool) -> Self {
+        self.collide_connected = collide;
         self
     }
 

@@ -89,7 +89,7 @@ pub use body::{
 pub use buoyancy::{Buoyancy, BuoyancyPoint, Water, Wave};
 pub use chain::{Chain, ChainBuilder, ChainEnd, ChainShape};
 pub use contact::{
-    Collider, ColliderBuilder, ColliderId, ContactError, ContactReport, ContactSettings,
+    Collider, ColliderBuilder, ColliderId, CollisionGroups, ContactError, ContactReport, ContactSettings,
     DEFAULT_CONTACT_COMPLIANCE, Material, Shape,
 };
 pub use coupling::{Coupling, CouplingBuilder, CouplingId, CouplingKind};

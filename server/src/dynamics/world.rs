@@ -220,6 +220,9 @@ impl World {
         }
         let id = JointId(self.joints.len() as u32);
         self.joint_names.insert(jb.name.clone(), id);
+        if jb.collide_connected {
+            self.contacts.connected.insert(id.0);
+        }
         self.joints.push(Joint {
             id,
             name: jb.name,

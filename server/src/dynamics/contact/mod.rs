@@ -4,7 +4,7 @@
 //! | file | concept |
 //! |---|---|
 //! | `convert.rs` | the one nalgebra ↔ glam boundary (parry 0.31 uses glam types) |
-//! | `shape.rs` | shapes (ball, cuboid, capsule, cylinder, convex hull, half-space), validation |
+//! | `shape.rs` | shapes (ball, cuboid, capsule, cylinder, convex hull, half-space, compound), validation |
 //! | `collide.rs` | broad phase (all pairs, AABB overlap with the margin) and parry manifolds |
 //! | `rows.rs` | contact points → one normal and two friction rows each |
 //!
@@ -23,8 +23,12 @@
 //! its last index state and impulse like a joint row.
 //!
 //! **Filtering.** Pairs on the same body, pairs without a dynamic body and pairs of bodies joined by
-//! a joint do not collide. `μ` of a pair is the geometric mean of the two materials' (default 1.0)
-//! unless the pair has its own ([`World::set_pair_friction`]).
+//! a joint do not collide (unless the joint opts in with
+//! [`JointBuilder::collide_connected`](super::JointBuilder::collide_connected)); two colliders
+//! collide only if each one's [`CollisionGroups::memberships`] intersect the other's
+//! [`CollisionGroups::filter`] (default: all groups, all filters). `μ` of a pair is the geometric
+//! mean of the two materials' (default 1.0) unless the pair has its own
+//! ([`World::set_pair_friction`]).
 //!
 //! **Compliance.** Normal and friction rows carry [`ContactSettings::compliance`] (default 1e-10 m/N,
 //! as joints): it keeps the redundant rows of a resting box (4 points, 12 rows for 6 dofs) regular
@@ -37,9 +41,13 @@
 //! contacts persist allocates nothing (`tests/dynamics_contact_allocation.rs`); a new pair or a new
 //! feature pair allocates once.
 //!
-//! **Not yet** (issue 5): compound shapes, triangle-mesh and heightfield terrain, collision
-//! groups/filters and an opt-in for jointed pairs, a BVH or sweep-and-prune broad phase (all pairs
-//! now), a material-pair table (per collider pair now). parry's cuboid–cuboid clipping sometimes
+//! **Compounds.** A compound collider is its parts, each a parry shape at its pose in the body frame:
+//! every part of one collider meets every part of the other (the colliders' AABBs, the unions of
+//! their parts', must overlap), and a point's feature ids carry its part index in bits 20–29, so
+//! the warm-start keys of two parts touching the ground stay apart.
+//!
+//! **Not yet** (issue 5): triangle-mesh and heightfield terrain, a BVH or
+//! sweep-and-prune broad phase (all pairs now), a material-pair table (per collider pair now). parry's cuboid–cuboid clipping sometimes
 //! returns 2 instead of 4 points for two equal, exactly aligned boxes (a stack of equal boxes stands,
 //! drifting ~1e-6 m over 20 s; the tests use boxes 1 cm narrower per level).
 //!
@@ -69,10 +77,9 @@ mod convert;
 mod rows;
 mod shape;
 
-use std::collections::HashMap;
+use std::collections::{HashMap, HashSet};
 
 use nalgebra::{Isometry3, Vector3};
-use parry3d_f64::shape::SharedShape;
 use thiserror::Error;
 
 pub use shape::Shape;
@@ -106,6 +113,37 @@ pub struct Material {
 impl Default for Material {
     fn default() -> Self {
         Material { friction: 1.0 }
+    }
+}
+
+/// Collision groups of a collider: 32 groups as bits. Colliders `a` and `b` collide only if
+/// `a.memberships & b.filter != 0` and `b.memberships & a.filter != 0`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub struct CollisionGroups {
+    /// The groups the collider belongs to.
+    pub memberships: u32,
+    /// The groups it may collide with.
+    pub filter: u32,
+}
+
+impl CollisionGroups {
+    /// Member of all groups, colliding with all (the default).
+    pub const ALL: CollisionGroups = CollisionGroups { memberships: u32::MAX, filter: u32::MAX };
+
+    /// Groups `memberships`, colliding with `filter`.
+    pub fn new(memberships: u32, filter: u32) -> Self {
+        CollisionGroups { memberships, filter }
+    }
+
+    /// Whether colliders with groups `self` and `other` may collide (symmetric).
+    pub fn interacts_with(self, other: CollisionGroups) -> bool {
+        self.memberships & other.filter != 0 && other.memberships & self.filter != 0
+    }
+}
+
+impl Default for CollisionGroups {
+    fn default() -> Self {
+        CollisionGroups::ALL
     }
 }
 
@@ -209,6 +247,15 @@ pub enum ContactError {
         /// Collider name.
         collider: String,
     },
+    /// A compound shape is malformed (no parts, too many, a half-space, compound or invalid pose
+    /// among them).
+    #[error("collider '{collider}': invalid compound: {reason}")]
+    InvalidCompound {
+        /// Collider name.
+        collider: String,
+        /// What is wrong.
+        reason: &'static str,
+    },
     /// The collider does not exist.
     #[error("unknown collider {0:?}")]
     UnknownCollider(ColliderId),
@@ -230,6 +277,7 @@ pub struct ColliderBuilder {
     shape: Shape,
     offset: Isometry3<f64>,
     material: Material,
+    groups: CollisionGroups,
 }
 
 impl ColliderBuilder {
@@ -241,6 +289,7 @@ impl ColliderBuilder {
             shape,
             offset: Isometry3::identity(),
             material: Material::default(),
+            groups: CollisionGroups::ALL,
         }
     }
     /// The collider's pose in the body frame.
@@ -258,6 +307,11 @@ impl ColliderBuilder {
         self.material.friction = mu;
         self
     }
+    /// The collision groups (default [`CollisionGroups::ALL`]).
+    pub fn groups(mut self, groups: CollisionGroups) -> Self {
+        self.groups = groups;
+        self
+    }
 }
 
 /// A collider of the world.
@@ -267,9 +321,9 @@ pub struct Collider {
     pub(crate) body: BodyId,
     pub(crate) shape: Shape,
     pub(crate) material: Material,
-    /// Pose of parry's shape frame in the body frame (offset ∘ shape rotation).
-    pub(crate) local: Isometry3<f64>,
-    pub(crate) parry: SharedShape,
+    pub(crate) groups: CollisionGroups,
+    /// Its parry shapes (one unless a compound) at their poses in the body frame.
+    pub(crate) parts: Vec<shape::ColliderPart>,
 }
 
 impl Collider {
@@ -289,6 +343,10 @@ impl Collider {
     pub fn material(&self) -> Material {
         self.material
     }
+    /// Its collision groups.
+    pub fn groups(&self) -> CollisionGroups {
+        self.groups
+    }
 }
 
 /// The contact state of a world: colliders, settings, pair caches, the last step's points.
@@ -299,6 +357,8 @@ pub(crate) struct ContactSet {
     pub settings: ContactSettings,
     /// Friction coefficients set per collider pair `(lower index, higher index)`.
     pub pair_friction: HashMap<(u32, u32), f64>,
+    /// Ids of the joints whose bodies collide with each other (`collide_connected`).
+    pub connected: HashSet<u32>,
     pub phase: collide::NarrowPhase,
 }
 
@@ -314,7 +374,14 @@ impl ContactSet {
         if self.colliders.is_empty() {
             return;
         }
-        self.phase.update(&self.colliders, &self.pair_friction, bodies, joints, self.settings.margin);
+        self.phase.update(
+            &self.colliders,
+            &self.pair_friction,
+            bodies,
+            joints,
+            &self.connected,
+            self.settings.margin,
+        );
         rows::push_contact_rows(&mut self.phase.points, bodies, &self.settings, h, rows);
     }
 }
@@ -363,15 +430,10 @@ impl World {
         if !(mu.is_finite() && mu >= 0.0) {
             return Err(ContactError::InvalidFriction { collider: name(), value: mu });
         }
-        let q = cb.offset.rotation.into_inner();
-        let qn = q.norm();
-        if !cb.offset.translation.vector.iter().all(|c| c.is_finite())
-            || !qn.is_finite()
-            || (qn - 1.0).abs() > 1e-6
-        {
+        if !shape::valid_isometry(&cb.offset) {
             return Err(ContactError::InvalidOffset { collider: name() });
         }
-        let (parry, rot) = cb.shape.build(&cb.name)?;
+        let parts = cb.shape.build_parts(&cb.name, &cb.offset)?;
         let id = ColliderId(self.contacts.colliders.len() as u32);
         self.contacts.names.insert(cb.name.clone(), id);
         self.contacts.colliders.push(Collider {
@@ -379,8 +441,8 @@ impl World {
             body: cb.body,
             shape: cb.shape,
             material: cb.material,
-            local: shape::parry_offset(&cb.offset, &rot),
-            parry,
+            groups: cb.groups,
+            parts,
         });
         Ok(id)
     }
@@ -425,6 +487,17 @@ impl World {
                 self.contacts.pair_friction.remove(&key);
             }
         }
+        Ok(())
+    }
+
+    /// Changes a collider's collision groups; it applies from the next step.
+    pub fn set_collision_groups(
+        &mut self,
+        id: ColliderId,
+        groups: CollisionGroups,
+    ) -> Result<(), ContactError> {
+        let c = self.contacts.colliders.get_mut(id.index()).ok_or(ContactError::UnknownCollider(id))?;
+        c.groups = groups;
         Ok(())
     }
 

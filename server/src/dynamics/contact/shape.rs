@@ -46,6 +46,32 @@ pub enum Shape {
         /// Outward unit normal (collider frame).
         normal: Vector3<f64>,
     },
+    /// Several bounded shapes, each at its pose in the collider frame (1 to 1024 parts; no
+    /// half-space or compound among them). Their union collides as one collider.
+    Compound {
+        /// The parts: pose in the collider frame and shape.
+        parts: Vec<(Isometry3<f64>, Shape)>,
+    },
+}
+
+/// Most parts of a [`Shape::Compound`] (the part index takes bits 20–29 of a contact's feature ids).
+pub(crate) const MAX_PARTS: usize = 1024;
+
+/// Bit of a contact feature id where the part index of a compound starts.
+pub(crate) const PART_SHIFT: u32 = 20;
+
+/// One parry shape of a collider at its pose in the body frame (one per part of a compound).
+#[derive(Debug, Clone)]
+pub(crate) struct ColliderPart {
+    /// Pose of parry's shape frame in the body frame (offsets ∘ shape rotation).
+    pub local: Isometry3<f64>,
+    pub parry: SharedShape,
+}
+
+/// Whether an isometry has a finite translation and a unit rotation quaternion.
+pub(crate) fn valid_isometry(iso: &Isometry3<f64>) -> bool {
+    let qn = iso.rotation.into_inner().norm();
+    iso.translation.vector.iter().all(|c| c.is_finite()) && qn.is_finite() && (qn - 1.0).abs() <= 1e-6
 }
 
 impl Shape {
@@ -58,6 +84,7 @@ impl Shape {
             Shape::Cylinder { .. } => "cylinder",
             Shape::ConvexHull { .. } => "convex hull",
             Shape::HalfSpace { .. } => "half-space",
+            Shape::Compound { .. } => "compound",
         }
     }
 
@@ -66,9 +93,38 @@ impl Shape {
         matches!(self, Shape::HalfSpace { .. })
     }
 
-    /// Validates the shape and builds its parry counterpart with the rotation from the collider
-    /// frame to parry's shape frame (parry's cylinder is along `y`).
-    pub(crate) fn build(&self, collider: &str) -> Result<(SharedShape, UnitQuaternion<f64>), ContactError> {
+    /// Validates the shape and builds its parts for a collider at `offset` in the body frame (one
+    /// part unless a compound).
+    pub(crate) fn build_parts(
+        &self,
+        collider: &str,
+        offset: &Isometry3<f64>,
+    ) -> Result<Vec<ColliderPart>, ContactError> {
+        let bad = |reason| ContactError::InvalidCompound { collider: collider.to_string(), reason };
+        let Shape::Compound { parts } = self else {
+            let (parry, rot) = self.build(collider)?;
+            return Ok(vec![ColliderPart { local: parry_offset(offset, &rot), parry }]);
+        };
+        if parts.is_empty() || parts.len() > MAX_PARTS {
+            return Err(bad("needs 1 to 1024 parts"));
+        }
+        let mut out = Vec::with_capacity(parts.len());
+        for (pose, part) in parts {
+            if part.is_unbounded() {
+                return Err(bad("a part cannot be a half-space"));
+            }
+            if !valid_isometry(pose) {
+                return Err(bad("a part's pose is invalid"));
+            }
+            let (parry, rot) = part.build(collider)?;
+            out.push(ColliderPart { local: parry_offset(&(offset * pose), &rot), parry });
+        }
+        Ok(out)
+    }
+
+    /// Validates a shape other than a compound and builds its parry counterpart with the rotation
+    /// from the collider frame to parry's shape frame (parry's cylinder is along `y`).
+    fn build(&self, collider: &str) -> Result<(SharedShape, UnitQuaternion<f64>), ContactError> {
         let size = |what: &'static str, value: f64, zero_ok: bool| {
             let ok = value.is_finite() && (value > 0.0 || (zero_ok && value == 0.0));
             if ok {
@@ -126,6 +182,12 @@ impl Shape {
                 }
                 (SharedShape::halfspace(to_vec(&(normal / norm))), id)
             }
+            Shape::Compound { .. } => {
+                return Err(ContactError::InvalidCompound {
+                    collider: collider.to_string(),
+                    reason: "a part cannot be a compound",
+                });
+            }
         })
     }
 }
@@ -154,6 +216,6 @@ fn spans_volume(points: &[Vector3<f64>]) -> bool {
 }
 
 /// The collider's pose in its body's frame composed with the shape's parry rotation.
-pub(crate) fn parry_offset(offset: &Isometry3<f64>, rot: &UnitQuaternion<f64>) -> Isometry3<f64> {
+fn parry_offset(offset: &Isometry3<f64>, rot: &UnitQuaternion<f64>) -> Isometry3<f64> {
     offset * Isometry3::from_parts(nalgebra::Translation3::identity(), *rot)
 }
