@@ -14,7 +14,7 @@ use pivotsim_server::dynamics::{
 
 #[path = "support/counting_alloc.rs"]
 mod counting_alloc;
-use counting_alloc::allocations;
+use counting_alloc::allocations_per_call;
 
 /// `chains` chains of `links` links hanging from a static ceiling (one island each).
 fn scene(chains: usize, links: usize, projection: usize) -> World {
@@ -155,12 +155,7 @@ fn allocations_per_step(w: &mut World) -> (f64, usize) {
     for _ in 0..120 {
         w.step().unwrap();
     }
-    let steps = 20;
-    let before = allocations();
-    for _ in 0..steps {
-        w.step().unwrap();
-    }
-    let per_step = (allocations() - before) as f64 / steps as f64;
+    let per_step = allocations_per_call(20, || w.step().unwrap());
     let solves = w.island_stats().len() * (1 + w.settings().projection_iterations);
     (per_step, solves)
 }

@@ -11,7 +11,7 @@ use pivotsim_server::dynamics::{
 
 #[path = "support/counting_alloc.rs"]
 mod counting_alloc;
-use counting_alloc::allocations;
+use counting_alloc::allocations_per_call;
 
 fn scene() -> World {
     let mut w = World::new(WorldSettings::default()).unwrap();
@@ -56,12 +56,7 @@ fn resting_contacts_allocate_nothing_once_warm() {
     for _ in 0..240 {
         w.step().unwrap();
     }
-    let steps = 20;
-    let before = allocations();
-    for _ in 0..steps {
-        w.step().unwrap();
-    }
-    let per_step = (allocations() - before) as f64 / steps as f64;
+    let per_step = allocations_per_call(20, || w.step().unwrap());
     let points = w.contacts().count();
     let rows: usize = w.island_stats().iter().map(|s| s.rows).sum();
     println!("contact scene: {per_step} allocations per step, {points} contact points, {rows} rows");

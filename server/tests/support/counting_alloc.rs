@@ -1,5 +1,5 @@
 //! A counting global allocator for the allocation tests: every `alloc` and `realloc` of the test
-//! binary that includes this module increments [`allocations`]; memory is served by the system
+//! binary that includes this module is counted ([`allocations_during`]); memory is served by the system
 //! allocator. Include with `#[path = "support/counting_alloc.rs"] mod counting_alloc;`.
 
 use std::alloc::{GlobalAlloc, Layout, System};
@@ -31,7 +31,15 @@ unsafe impl GlobalAlloc for Counting {
 #[global_allocator]
 static GLOBAL: Counting = Counting;
 
-/// Allocations (including reallocations) so far in this test binary.
-pub fn allocations() -> usize {
-    ALLOCS.load(Ordering::Relaxed)
+/// Allocations (including reallocations) made while `f` runs.
+pub fn allocations_during(f: impl FnOnce()) -> usize {
+    let before = ALLOCS.load(Ordering::Relaxed);
+    f();
+    ALLOCS.load(Ordering::Relaxed) - before
+}
+
+/// Mean allocations per call of `f` over `n` calls.
+#[allow(dead_code)] // not every test binary that includes this module uses it
+pub fn allocations_per_call(n: usize, mut f: impl FnMut()) -> f64 {
+    allocations_during(|| (0..n).for_each(|_| f())) as f64 / n as f64
 }
