@@ -4,4 +4,6 @@
 pub mod bench;
 pub mod dynamics;
 pub mod plot;
+pub mod run;
+pub mod scene;
 pub mod solver;

@@ -1,8 +1,8 @@
 //! `pivotsim-server`: the CLI over the pivotsim library.
 //!
-//! Subcommands today: `solve` (one MLCP file), `pattern` (sparsity plots) and `bench-solver` (every
-//! variant on generated and shared problems). `serve`, `run` and `scenes` arrive with the server,
-//! scene and dynamics issues.
+//! Subcommands: `run` (a scene headless, as fast as possible), `scenes` (the built-in scenes),
+//! `solve` (one MLCP file), `pattern` (sparsity plots) and `bench-solver` (every variant on
+//! generated and shared problems). `serve` arrives with the server issue.
 
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -21,6 +21,35 @@ struct Cli {
 
 #[derive(Debug, Subcommand)]
 enum Command {
+    /// Run a scene headless under its script, as fast as possible, and print a summary.
+    Run {
+        /// A built-in scene name (see `scenes`) or a scene file path.
+        #[arg(long)]
+        scene: String,
+        /// Simulated seconds (default: the scene's duration).
+        #[arg(long)]
+        duration: Option<f64>,
+        /// Solver variant for every island (default: the scene's).
+        #[arg(long)]
+        variant: Option<Variant>,
+        /// Write per-step, per-island solver statistics here (CSV).
+        #[arg(long)]
+        stats: Option<PathBuf>,
+        /// Write per-step body poses here (CSV).
+        #[arg(long)]
+        poses: Option<PathBuf>,
+        /// Dump island problems in the MLCP file format into this directory.
+        #[arg(long)]
+        dump_mlcp: Option<PathBuf>,
+        /// With --dump-mlcp: every N-th step.
+        #[arg(long, default_value_t = 60)]
+        every: usize,
+        /// Print the summary as one JSON object.
+        #[arg(long)]
+        json: bool,
+    },
+    /// List the built-in scenes.
+    Scenes,
     /// Plot the sparsity pattern of an MLCP file's matrix before and after reordering, and its
     /// envelope factor (paper Fig. 5 and 6), as one SVG.
     Pattern {
@@ -80,6 +109,24 @@ fn main() -> ExitCode {
         Some(Command::Solve { file, variant, max_steps, ordering, tol, solution, deletion_error, json }) => {
             solve(&file, variant, max_steps, ordering, tol, solution, deletion_error, json)
         }
+        Some(Command::Run { scene, duration, variant, stats, poses, dump_mlcp, every, json }) => {
+            let opts = pivotsim_server::run::RunOptions {
+                duration,
+                variant,
+                stats,
+                poses,
+                dump_mlcp,
+                every,
+                progress: !json,
+            };
+            run(&scene, &opts, json)
+        }
+        Some(Command::Scenes) => {
+            for b in pivotsim_server::scene::BUILTIN {
+                println!("{:<16} {}", b.name, b.summary);
+            }
+            Ok(())
+        }
         Some(Command::Pattern { file, out, ordering }) => pattern(&file, &out, ordering),
         Some(Command::BenchSolver { out, quick, data }) => {
             let cfg = pivotsim_server::bench::BenchConfig::new(out, quick, data);
@@ -99,6 +146,20 @@ fn main() -> ExitCode {
             ExitCode::FAILURE
         }
     }
+}
+
+fn run(scene: &str, opts: &pivotsim_server::run::RunOptions, json: bool) -> anyhow::Result<()> {
+    let mut sc = pivotsim_server::scene::load(scene)?;
+    let summary = pivotsim_server::run::run_scene(&mut sc, opts)?;
+    if json {
+        println!("{}", serde_json::to_string(&summary)?);
+    } else {
+        println!("{}", pivotsim_server::run::summary_text(&summary));
+    }
+    if !summary.finite {
+        anyhow::bail!("the run stopped: {}", summary.error.as_deref().unwrap_or("non-finite state"));
+    }
+    Ok(())
 }
 
 fn pattern(file: &std::path::Path, out: &std::path::Path, ordering: OrderingKind) -> anyhow::Result<()> {

@@ -84,6 +84,7 @@ mod tests {
             stabilization: 1.0,
             limits: [None; 2],
             motors: [None; 2],
+            enabled: true,
         }
     }
 

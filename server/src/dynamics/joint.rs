@@ -209,6 +209,8 @@ pub struct JointBuilder {
     pub(crate) motors: [Option<JointMotor>; 2],
     /// Whether the joined bodies' colliders collide with each other (default false).
     pub(crate) collide_connected: bool,
+    /// Whether the joint starts enabled (default true; see [`World::set_joint_enabled`](super::World::set_joint_enabled)).
+    pub(crate) enabled: bool,
 }
 
 impl JointBuilder {
@@ -231,6 +233,7 @@ impl JointBuilder {
             limits: [None; 2],
             motors: [None; 2],
             collide_connected: false,
+            enabled: true,
         }
     }
 
@@ -347,6 +350,13 @@ impl JointBuilder {
         self
     }
 
+    /// Builds the joint disabled (`false`): it adds no rows until
+    /// [`World::set_joint_enabled`](super::World::set_joint_enabled) latches it.
+    pub fn enabled(mut self, enabled: bool) -> Self {
+        self.enabled = enabled;
+        self
+    }
+
     /// The name given.
     pub fn name(&self) -> &str {
         &self.name
@@ -367,9 +377,16 @@ pub struct Joint {
     pub(crate) stabilization: f64,
     pub(crate) limits: [Option<JointLimit>; 2],
     pub(crate) motors: [Option<JointMotor>; 2],
+    /// A disabled joint contributes no rows (a hook not yet latched, a released grapple).
+    pub(crate) enabled: bool,
 }
 
 impl Joint {
+    /// Whether the joint currently contributes rows.
+    pub fn is_enabled(&self) -> bool {
+        self.enabled
+    }
+
     /// Id.
     pub fn id(&self) -> JointId {
         self.id

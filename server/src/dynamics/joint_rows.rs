@@ -270,6 +270,7 @@ mod tests {
             stabilization: 1.0,
             limits,
             motors,
+            enabled: true,
         }
     }
 

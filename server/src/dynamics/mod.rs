@@ -33,6 +33,7 @@
 //! | `assemble.rs` | per-island `A`, `b` from body blocks; `v⁺ = v_free + M⁻¹Jᵀλ` |
 //! | `step.rs` | the time step and its integrator |
 //! | `projection.rs` | optional position projection (post-stabilization) |
+//! | `control.rs` | live model changes: latching/releasing joints, capturing island problems |
 //! | `world.rs` | the world: settings (and the projection default), adding and validating items, controls |
 //! | `query.rs` | read access: coordinates, impulses, reactions, islands, momentum |
 //! | `stats.rs` | per-island statistics of a step |
@@ -68,6 +69,7 @@ mod body;
 mod buoyancy;
 mod chain;
 mod contact;
+mod control;
 mod coupling;
 mod coupling_rows;
 mod error;

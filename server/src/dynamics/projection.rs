@@ -80,7 +80,7 @@ pub(crate) fn project(
             },
         };
         ws.proj_rows.clear();
-        for j in joints {
+        for j in joints.iter().filter(|j| j.enabled) {
             let (a, b) = (side(Some(j.body_a), ws), side(j.body_b, ws));
             push_joint_rows(j, &a, &b, h, &mut ws.proj_rows);
         }

@@ -158,7 +158,11 @@ impl World {
     /// Largest anchor separation `|p_b − p_a|` over all joints at the current poses (m); along a
     /// prismatic or cylindrical joint's axis the separation is its free displacement.
     pub fn max_anchor_error(&self) -> f64 {
-        self.joints.iter().map(|j| self.joint_geometry(j).anchor_error()).fold(0.0, f64::max)
+        self.joints
+            .iter()
+            .filter(|j| j.enabled)
+            .map(|j| self.joint_geometry(j).anchor_error())
+            .fold(0.0, f64::max)
     }
 
     pub(crate) fn joint_geometry(&self, j: &Joint) -> JointGeometry {

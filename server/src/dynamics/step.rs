@@ -98,6 +98,10 @@ pub(crate) struct StepWorkspace {
     pub stats: Vec<IslandStats>,
     /// Island index → index in `stats` (`usize::MAX` for islands without rows).
     pub stat_of_island: Vec<usize>,
+    /// When on, a copy of every island's MLCP of the last step (for `--dump-mlcp`; allocates).
+    pub capture: bool,
+    /// The captured problems, in the order of `stats`.
+    pub captured: Vec<Mlcp>,
     pub proj_rows: Vec<ConstraintRow>,
     pub proj_islands: Islands,
     pub proj_solvers: Vec<Solver>,
@@ -258,6 +262,9 @@ impl StepWorkspace {
             .fill_mlcp(&mut self.problem, settings.warm_start)
             .map_err(|source| StepError::Assembly { island: k, source })?;
         let assemble_us = t.elapsed().as_secs_f64() * 1e6;
+        if self.capture {
+            self.captured.push(self.problem.clone());
+        }
         let s = self.solvers[solved].solve(&self.problem, &mut self.asm.lambda);
         let st = IslandStats {
             island: k,
@@ -304,7 +311,7 @@ impl World {
 
         // 3–4. Rows and islands.
         ws.rows.clear();
-        for j in &self.joints {
+        for j in self.joints.iter().filter(|j| j.enabled) {
             let a = side_of(&self.bodies, &ws.v_new, &ws.w_new, Some(j.body_a));
             let b = side_of(&self.bodies, &ws.v_new, &ws.w_new, j.body_b);
             push_joint_rows(j, &a, &b, h, &mut ws.rows);
@@ -330,6 +337,7 @@ impl World {
 
         // 5–6. One MLCP per island; v⁺ = v_free + M⁻¹ Jᵀ λ (bodies without rows keep v_free).
         ws.stats.clear();
+        ws.captured.clear();
         ws.stat_of_island.clear();
         ws.stat_of_island.resize(ws.islands.len(), usize::MAX);
         for k in 0..ws.islands.len() {

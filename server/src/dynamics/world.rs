@@ -235,6 +235,7 @@ impl World {
             stabilization: jb.stabilization,
             limits: jb.limits,
             motors: jb.motors,
+            enabled: jb.enabled,
         });
         Ok(id)
     }

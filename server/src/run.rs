@@ -1,0 +1,435 @@
+//! The headless runner behind `pivotsim-server run`: a scene driven by its script as fast as
+//! possible, with a progress bar, per-step statistics and poses as CSV, island problems dumped in
+//! the MLCP file format, and a summary (text or one JSON object).
+//!
+//! Definitions used in the summary (per step unless said otherwise):
+//! - *solve time*: the sum over islands of the solver's wall time ([`IslandStats::solve_us`]);
+//!   mean and 99th percentile over steps;
+//! - *mass ratio* of an island: largest over smallest body mass among its dynamic bodies (paper
+//!   Table 2); the summary reports the largest over the run;
+//! - *tight fraction*: tight rows over rows of an island (the share of variables at a bound);
+//! - *joint error*: [`World::max_anchor_error`] after the step, the largest over the run;
+//! - *finite*: no step ever failed on a NaN/Inf state or problem (the run stops at the first).
+
+use std::fs::File;
+use std::io::{BufWriter, Write};
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use indicatif::{ProgressBar, ProgressStyle};
+use serde::Serialize;
+use thiserror::Error;
+
+use crate::dynamics::{IslandStats, World};
+use crate::scene::{Scene, SceneStepError};
+use crate::solver::{SolveStatus, Variant, io};
+
+/// What to run and what to write.
+#[derive(Debug, Clone, Default)]
+pub struct RunOptions {
+    /// Simulated seconds (default: the scene's duration).
+    pub duration: Option<f64>,
+    /// Solver variant for every island (default: the scene's).
+    pub variant: Option<Variant>,
+    /// Per-step, per-island statistics CSV.
+    pub stats: Option<PathBuf>,
+    /// Per-step body poses CSV.
+    pub poses: Option<PathBuf>,
+    /// Directory for island MLCP dumps.
+    pub dump_mlcp: Option<PathBuf>,
+    /// Dump every N-th step (≥ 1).
+    pub every: usize,
+    /// Show a progress bar on a terminal.
+    pub progress: bool,
+}
+
+/// The run's summary (`--json` prints it as one object).
+#[derive(Debug, Clone, Serialize, PartialEq)]
+pub struct RunSummary {
+    /// Scene name.
+    pub scene: String,
+    /// Solver variant.
+    pub variant: String,
+    /// Steps taken.
+    pub steps: u64,
+    /// Simulated time (s).
+    pub sim_time_s: f64,
+    /// Wall time of the stepping loop (s), writers included.
+    pub wall_s: f64,
+    /// Simulated over wall time.
+    pub realtime_factor: f64,
+    /// Largest island (rows).
+    pub max_island_rows: usize,
+    /// Largest island (bodies).
+    pub max_island_bodies: usize,
+    /// Most islands with rows in one step.
+    pub max_islands: usize,
+    /// Largest body-mass ratio within an island.
+    pub max_mass_ratio: f64,
+    /// Mean solve time per step (µs).
+    pub mean_solve_us: f64,
+    /// 99th-percentile solve time per step (µs).
+    pub p99_solve_us: f64,
+    /// Largest solve time of a step (µs).
+    pub max_solve_us: f64,
+    /// Mean wall time per step, everything included (µs).
+    pub mean_step_us: f64,
+    /// Mean pivot steps per island solve.
+    pub mean_pivot_steps: f64,
+    /// Most pivot steps of one island solve.
+    pub max_pivot_steps: usize,
+    /// Largest tight fraction of an island.
+    pub max_tight_fraction: f64,
+    /// Mean tight fraction of the largest island per step.
+    pub mean_tight_fraction: f64,
+    /// Largest joint anchor error after a step (m).
+    pub max_joint_error_m: f64,
+    /// Largest relative natural-map residual of an island solve.
+    pub max_residual_rel: f64,
+    /// Island solves by outcome: converged, inexact, max_steps, other.
+    pub solves_converged: u64,
+    /// Solves that ended inexact (residual at the precision floor).
+    pub solves_inexact: u64,
+    /// Solves that hit the pivot-step cap.
+    pub solves_max_steps: u64,
+    /// Solves with any other status.
+    pub solves_other: u64,
+    /// No NaN/Inf ever appeared.
+    pub finite: bool,
+    /// Why the run stopped early, if it did.
+    pub error: Option<String>,
+    /// Island problems written by `--dump-mlcp`.
+    pub dumped: usize,
+}
+
+/// Why a run could not start or write its outputs.
+#[derive(Debug, Error)]
+pub enum RunError {
+    /// An output file.
+    #[error("{path}: {source}")]
+    Io {
+        /// The file.
+        path: String,
+        /// The cause.
+        source: std::io::Error,
+    },
+    /// A CSV writer.
+    #[error("{path}: {source}")]
+    Csv {
+        /// The file.
+        path: String,
+        /// The cause.
+        source: csv::Error,
+    },
+    /// A bad option.
+    #[error("{0}")]
+    Option(String),
+}
+
+#[derive(Serialize)]
+struct StatsRow<'a> {
+    step: u64,
+    time: f64,
+    island: usize,
+    bodies: usize,
+    rows: usize,
+    nnz: usize,
+    mass_ratio: f64,
+    variant: &'a str,
+    status: &'a str,
+    pivot_steps: usize,
+    tight: usize,
+    solve_us: f64,
+    assemble_us: f64,
+    residual: f64,
+    residual_rel: f64,
+    max_violation: f64,
+}
+
+#[derive(Serialize)]
+struct PoseRow<'a> {
+    step: u64,
+    time: f64,
+    body: &'a str,
+    x: f64,
+    y: f64,
+    z: f64,
+    qw: f64,
+    qx: f64,
+    qy: f64,
+    qz: f64,
+}
+
+fn csv_writer(path: &Path) -> Result<csv::Writer<BufWriter<File>>, RunError> {
+    let f = File::create(path).map_err(|source| RunError::Io { path: path.display().to_string(), source })?;
+    Ok(csv::Writer::from_writer(BufWriter::new(f)))
+}
+
+/// Largest over smallest mass of island `k`'s dynamic bodies.
+pub fn island_mass_ratio(world: &World, k: usize) -> f64 {
+    let (mut lo, mut hi) = (f64::INFINITY, 0.0f64);
+    for &b in world.islands().bodies(k) {
+        let m = world.bodies()[b].mass();
+        lo = lo.min(m);
+        hi = hi.max(m);
+    }
+    if lo.is_finite() && lo > 0.0 { hi / lo } else { 1.0 }
+}
+
+/// Per-step accumulators of the summary.
+#[derive(Default)]
+struct Acc {
+    solve_us: Vec<f64>,
+    step_us: f64,
+    pivots: u64,
+    solves: u64,
+    tight_largest: f64,
+}
+
+/// Runs `scene` under its script for the options' duration and returns the summary; a step that
+/// fails (non-finite state) ends the run with `finite = false` and the error in the summary.
+pub fn run_scene(scene: &mut Scene, opts: &RunOptions) -> Result<RunSummary, RunError> {
+    run_scene_observed(scene, opts, |_| {})
+}
+
+/// [`run_scene`] with `on_step` called on the world after every step (tests record trajectories
+/// with it).
+pub fn run_scene_observed(
+    scene: &mut Scene,
+    opts: &RunOptions,
+    mut on_step: impl FnMut(&World),
+) -> Result<RunSummary, RunError> {
+    if let Some(v) = opts.variant {
+        let mut s = *scene.world.settings();
+        s.solver.variant = v;
+        scene.world.set_settings(s).map_err(|e| RunError::Option(e.to_string()))?;
+    }
+    let h = scene.world.settings().timestep;
+    let duration = opts.duration.unwrap_or(scene.duration);
+    if !(duration.is_finite() && duration > 0.0) {
+        return Err(RunError::Option(format!("duration {duration} must be a finite number > 0")));
+    }
+    let every = opts.every.max(1);
+    let steps = (duration / h).round() as u64;
+    let path_str = |p: &Path| p.display().to_string();
+    let mut stats_w = opts.stats.as_deref().map(csv_writer).transpose()?;
+    let mut poses_w = opts.poses.as_deref().map(csv_writer).transpose()?;
+    if let Some(dir) = &opts.dump_mlcp {
+        std::fs::create_dir_all(dir).map_err(|source| RunError::Io { path: path_str(dir), source })?;
+    }
+    let bar = if opts.progress { ProgressBar::new(steps) } else { ProgressBar::hidden() };
+    bar.set_style(
+        ProgressStyle::with_template("{spinner} {msg} [{bar:30}] {pos}/{len} steps, {per_sec}, eta {eta}")
+            .expect("static template")
+            .progress_chars("=> "),
+    );
+    bar.set_message(scene.name.clone());
+
+    let mut sum = RunSummary {
+        scene: scene.name.clone(),
+        variant: scene.world.settings().solver.variant.name().to_string(),
+        steps: 0,
+        sim_time_s: 0.0,
+        wall_s: 0.0,
+        realtime_factor: 0.0,
+        max_island_rows: 0,
+        max_island_bodies: 0,
+        max_islands: 0,
+        max_mass_ratio: 1.0,
+        mean_solve_us: 0.0,
+        p99_solve_us: 0.0,
+        max_solve_us: 0.0,
+        mean_step_us: 0.0,
+        mean_pivot_steps: 0.0,
+        max_pivot_steps: 0,
+        max_tight_fraction: 0.0,
+        mean_tight_fraction: 0.0,
+        max_joint_error_m: 0.0,
+        max_residual_rel: 0.0,
+        solves_converged: 0,
+        solves_inexact: 0,
+        solves_max_steps: 0,
+        solves_other: 0,
+        finite: true,
+        error: None,
+        dumped: 0,
+    };
+    let mut acc = Acc { solve_us: Vec::with_capacity(steps as usize), ..Acc::default() };
+    let start = Instant::now();
+    let tick = (steps / 200).max(1);
+    for n in 0..steps {
+        let dump = opts.dump_mlcp.is_some() && n % every as u64 == 0;
+        scene.world.set_capture_problems(dump);
+        let t0 = Instant::now();
+        match scene.step() {
+            Ok(()) => {}
+            Err(e) => {
+                // A step refuses to commit a non-finite state or problem; a refused actuator
+                // is not a NaN.
+                sum.finite = matches!(e, SceneStepError::Control(_));
+                sum.error = Some(e.to_string());
+                break;
+            }
+        }
+        acc.step_us += t0.elapsed().as_secs_f64() * 1e6;
+        let world = &scene.world;
+        let step = world.steps();
+        let time = world.time();
+        record_step(world, &mut sum, &mut acc);
+        on_step(world);
+        if let Some(w) = stats_w.as_mut() {
+            let path = opts.stats.as_deref().map(path_str).unwrap_or_default();
+            for s in world.island_stats() {
+                let row = StatsRow {
+                    step,
+                    time,
+                    island: s.island,
+                    bodies: s.bodies,
+                    rows: s.rows,
+                    nnz: s.nnz,
+                    mass_ratio: island_mass_ratio(world, s.island),
+                    variant: s.variant.name(),
+                    status: s.status.name(),
+                    pivot_steps: s.pivot_steps,
+                    tight: s.tight,
+                    solve_us: s.solve_us,
+                    assemble_us: s.assemble_us,
+                    residual: s.residual,
+                    residual_rel: s.residual_rel,
+                    max_violation: s.max_violation,
+                };
+                w.serialize(row).map_err(|source| RunError::Csv { path: path.clone(), source })?;
+            }
+        }
+        if let Some(w) = poses_w.as_mut() {
+            let path = opts.poses.as_deref().map(path_str).unwrap_or_default();
+            for b in world.bodies().iter().filter(|b| b.is_dynamic()) {
+                let (x, q) = (b.position(), b.orientation());
+                let row = PoseRow {
+                    step,
+                    time,
+                    body: b.name(),
+                    x: x.x,
+                    y: x.y,
+                    z: x.z,
+                    qw: q.w,
+                    qx: q.i,
+                    qy: q.j,
+                    qz: q.k,
+                };
+                w.serialize(row).map_err(|source| RunError::Csv { path: path.clone(), source })?;
+            }
+        }
+        if let (true, Some(dir)) = (dump, &opts.dump_mlcp) {
+            for (p, s) in world.captured_problems().iter().zip(world.island_stats()) {
+                let path = dir.join(format!("{}-step{:06}-island{}.txt", scene.name, step, s.island));
+                let f =
+                    File::create(&path).map_err(|source| RunError::Io { path: path_str(&path), source })?;
+                let mut out = BufWriter::new(f);
+                io::write_mlcp(p, &mut out)
+                    .and_then(|()| out.flush())
+                    .map_err(|source| RunError::Io { path: path_str(&path), source })?;
+                sum.dumped += 1;
+            }
+        }
+        if n % tick == 0 {
+            bar.set_position(n + 1);
+        }
+    }
+    scene.world.set_capture_problems(false);
+    bar.finish_and_clear();
+    for (w, p) in [(stats_w.as_mut(), &opts.stats), (poses_w.as_mut(), &opts.poses)] {
+        if let (Some(w), Some(p)) = (w, p) {
+            w.flush().map_err(|source| RunError::Io { path: path_str(p), source })?;
+        }
+    }
+    sum.wall_s = start.elapsed().as_secs_f64();
+    sum.steps = acc.solve_us.len() as u64;
+    sum.sim_time_s = scene.world.time();
+    sum.realtime_factor = if sum.wall_s > 0.0 { sum.sim_time_s / sum.wall_s } else { 0.0 };
+    let n = acc.solve_us.len().max(1) as f64;
+    sum.mean_solve_us = acc.solve_us.iter().sum::<f64>() / n;
+    sum.mean_step_us = acc.step_us / n;
+    sum.mean_pivot_steps = acc.pivots as f64 / acc.solves.max(1) as f64;
+    sum.mean_tight_fraction = acc.tight_largest / n;
+    acc.solve_us.sort_by(f64::total_cmp);
+    if let Some(&max) = acc.solve_us.last() {
+        sum.max_solve_us = max;
+        let i = ((acc.solve_us.len() as f64 * 0.99).ceil() as usize).clamp(1, acc.solve_us.len()) - 1;
+        sum.p99_solve_us = acc.solve_us[i];
+    }
+    Ok(sum)
+}
+
+fn record_step(world: &World, sum: &mut RunSummary, acc: &mut Acc) {
+    let stats = world.island_stats();
+    let mut solve = 0.0;
+    let mut largest: Option<&IslandStats> = None;
+    for s in stats {
+        solve += s.solve_us;
+        sum.max_island_rows = sum.max_island_rows.max(s.rows);
+        sum.max_island_bodies = sum.max_island_bodies.max(s.bodies);
+        sum.max_mass_ratio = sum.max_mass_ratio.max(island_mass_ratio(world, s.island));
+        sum.max_pivot_steps = sum.max_pivot_steps.max(s.pivot_steps);
+        sum.max_residual_rel = sum.max_residual_rel.max(s.residual_rel);
+        if s.rows > 0 {
+            sum.max_tight_fraction = sum.max_tight_fraction.max(s.tight as f64 / s.rows as f64);
+        }
+        if largest.is_none_or(|l| s.rows > l.rows) {
+            largest = Some(s);
+        }
+        acc.pivots += s.pivot_steps as u64;
+        acc.solves += 1;
+        match s.status {
+            SolveStatus::Converged => sum.solves_converged += 1,
+            SolveStatus::Inexact => sum.solves_inexact += 1,
+            SolveStatus::MaxSteps => sum.solves_max_steps += 1,
+            _ => sum.solves_other += 1,
+        }
+    }
+    if let Some(l) = largest.filter(|l| l.rows > 0) {
+        acc.tight_largest += l.tight as f64 / l.rows as f64;
+    }
+    sum.max_islands = sum.max_islands.max(stats.len());
+    sum.max_joint_error_m = sum.max_joint_error_m.max(world.max_anchor_error());
+    acc.solve_us.push(solve);
+}
+
+/// The summary as text lines.
+pub fn summary_text(s: &RunSummary) -> String {
+    format!(
+        "scene {} ({}): {} steps, {:.2} s simulated in {:.3} s wall (real-time factor {:.1})\n\
+         islands: up to {} with rows; largest {} rows, {} bodies; mass ratio up to {:.3e}\n\
+         solve per step: mean {:.1} µs, p99 {:.1} µs, max {:.1} µs; step mean {:.1} µs\n\
+         pivots per solve: mean {:.2}, max {}; tight fraction max {:.3}, mean (largest island) {:.3}\n\
+         solves: {} converged, {} inexact, {} at the step cap, {} other; max relative residual {:.2e}\n\
+         joint error max {:.3e} m; finite: {}{}{}",
+        s.scene,
+        s.variant,
+        s.steps,
+        s.sim_time_s,
+        s.wall_s,
+        s.realtime_factor,
+        s.max_islands,
+        s.max_island_rows,
+        s.max_island_bodies,
+        s.max_mass_ratio,
+        s.mean_solve_us,
+        s.p99_solve_us,
+        s.max_solve_us,
+        s.mean_step_us,
+        s.mean_pivot_steps,
+        s.max_pivot_steps,
+        s.max_tight_fraction,
+        s.mean_tight_fraction,
+        s.solves_converged,
+        s.solves_inexact,
+        s.solves_max_steps,
+        s.solves_other,
+        s.max_residual_rel,
+        s.max_joint_error_m,
+        s.finite,
+        s.error.as_deref().map(|e| format!("\nstopped early: {e}")).unwrap_or_default(),
+        if s.dumped > 0 { format!("\nMLCP files written: {}", s.dumped) } else { String::new() },
+    )
+}

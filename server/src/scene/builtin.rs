@@ -1,0 +1,35 @@
+//! The scenes shipped in `scenes/`, embedded in the binary so that `--scene NAME` works from any
+//! directory.
+
+/// A built-in scene: its name, a one-line summary and the file text.
+#[derive(Debug, Clone, Copy)]
+pub struct BuiltinScene {
+    /// Name (the file stem).
+    pub name: &'static str,
+    /// One line for `pivotsim-server scenes`.
+    pub summary: &'static str,
+    /// The scene file.
+    pub text: &'static str,
+}
+
+macro_rules! scene {
+    ($name:literal, $summary:literal) => {
+        BuiltinScene {
+            name: $name,
+            summary: $summary,
+            text: include_str!(concat!("../../../scenes/", $name, ".toml")),
+        }
+    };
+}
+
+/// All built-in scenes.
+pub const BUILTIN: &[BuiltinScene] = &[
+    scene!("pendulum", "a double pendulum on hinges: the smallest scene with joints"),
+    scene!("box_stack", "ten boxes stacked on the ground, mass ratio 100 between neighbours"),
+    scene!("hanging_chain", "a chain of 20 capsules on ball joints, released sideways"),
+];
+
+/// The built-in scene `name`.
+pub fn builtin(name: &str) -> Option<&'static BuiltinScene> {
+    BUILTIN.iter().find(|b| b.name == name)
+}

@@ -1,0 +1,242 @@
+//! The scene file's syntax: serde types mirroring `scenes/README.md` one to one. Unknown fields are
+//! refused by serde (with their location); meaning (references, ranges, finiteness) is checked by
+//! `build.rs`, which locates its errors through the [`Spanned`] tables.
+
+use std::collections::BTreeMap;
+
+use serde::Deserialize;
+use toml::Spanned;
+
+/// A whole scene file.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct SceneFile {
+    pub scene: Spanned<SceneSection>,
+    #[serde(default)]
+    pub body: Vec<Spanned<BodyDef>>,
+    #[serde(default)]
+    pub joint: Vec<Spanned<JointDef>>,
+    #[serde(default)]
+    pub coupling: Vec<Spanned<CouplingDef>>,
+    #[serde(default)]
+    pub spring: Vec<Spanned<SpringDef>>,
+    #[serde(default)]
+    pub repeat: Vec<Spanned<RepeatDef>>,
+    #[serde(default)]
+    pub actuator: Vec<Spanned<ActuatorDef>>,
+    #[serde(default)]
+    pub joystick: Option<Spanned<JoystickDef>>,
+    #[serde(default)]
+    pub script: Vec<Spanned<ScriptDef>>,
+}
+
+/// `[scene]`: name, text and world settings.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct SceneSection {
+    pub name: String,
+    #[serde(default)]
+    pub description: String,
+    pub duration: Option<f64>,
+    pub timestep: Option<f64>,
+    pub gravity: Option<[f64; 3]>,
+    pub variant: Option<String>,
+    pub compliance: Option<f64>,
+    pub contact_compliance: Option<f64>,
+    pub friction: Option<f64>,
+    pub max_pivot_steps: Option<usize>,
+    pub projection_iterations: Option<usize>,
+    pub warm_start: Option<bool>,
+    pub gyroscopic: Option<bool>,
+}
+
+/// `[[body]]` (also inside `[[repeat]]`).
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct BodyDef {
+    pub name: String,
+    pub kind: Option<String>,
+    pub mass: Option<f64>,
+    pub inertia: Option<[f64; 3]>,
+    #[serde(default)]
+    pub position: [f64; 3],
+    pub rotation: Option<[f64; 3]>,
+    pub quaternion: Option<[f64; 4]>,
+    pub velocity: Option<[f64; 3]>,
+    pub angular_velocity: Option<[f64; 3]>,
+    pub damping: Option<[f64; 2]>,
+    pub groups: Option<[u32; 2]>,
+    #[serde(default)]
+    pub shape: Vec<Spanned<ShapeDef>>,
+}
+
+/// `[[body.shape]]`: one collider of the body.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct ShapeDef {
+    #[serde(rename = "type")]
+    pub kind: String,
+    pub size: Option<[f64; 3]>,
+    pub radius: Option<f64>,
+    pub length: Option<f64>,
+    pub normal: Option<[f64; 3]>,
+    pub points: Option<Vec<[f64; 3]>>,
+    #[serde(default)]
+    pub position: [f64; 3],
+    pub rotation: Option<[f64; 3]>,
+    pub friction: Option<f64>,
+    /// Heightfield: rows of heights (m), `size` its x/y extent and a z scale.
+    pub heights: Option<Vec<Vec<f64>>>,
+    /// Stairs: step count, rise and run (m); width from `size[1]`.
+    pub steps: Option<usize>,
+    pub rise: Option<f64>,
+    pub run: Option<f64>,
+    /// Hills: amplitude (m), wavelength (m) and grid resolution (cells per side).
+    pub amplitude: Option<f64>,
+    pub wavelength: Option<f64>,
+    pub cells: Option<usize>,
+    /// Triangle mesh: vertices and index triples.
+    pub vertices: Option<Vec<[f64; 3]>>,
+    pub triangles: Option<Vec<[u32; 3]>>,
+}
+
+/// `[[joint]]` (also inside `[[repeat]]`).
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct JointDef {
+    pub name: String,
+    #[serde(rename = "type")]
+    pub kind: String,
+    pub a: String,
+    pub b: Option<String>,
+    pub anchor: [f64; 3],
+    pub axis: Option<[f64; 3]>,
+    pub axis2: Option<[f64; 3]>,
+    pub limits: Option<[f64; 2]>,
+    pub motor: Option<MotorDef>,
+    pub compliance: Option<f64>,
+    pub stabilization: Option<f64>,
+    #[serde(default)]
+    pub collide_connected: bool,
+    pub enabled: Option<bool>,
+    /// In a repeat: first instance that has this joint (default 0).
+    pub from: Option<usize>,
+}
+
+/// A joint's initial motor.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct MotorDef {
+    pub speed: Option<f64>,
+    pub target: Option<f64>,
+    pub max_speed: Option<f64>,
+    pub max_force: f64,
+    pub gain: Option<f64>,
+}
+
+/// `[[coupling]]`: gear or differential between joints.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct CouplingDef {
+    pub name: String,
+    #[serde(rename = "type")]
+    pub kind: String,
+    pub joints: Vec<String>,
+    pub ratio: f64,
+    pub max_torque: Option<f64>,
+    pub compliance: Option<f64>,
+}
+
+/// `[[spring]]`: a linear spring–damper between two world points at load time.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct SpringDef {
+    pub name: String,
+    pub a: String,
+    pub anchor_a: [f64; 3],
+    pub b: Option<String>,
+    pub anchor_b: [f64; 3],
+    pub rest_length: Option<f64>,
+    pub stiffness: f64,
+    #[serde(default)]
+    pub damping: f64,
+}
+
+/// `[[repeat]]`: bodies, joints and springs written once, instantiated `count` times.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct RepeatDef {
+    pub count: Option<usize>,
+    pub step: Option<[f64; 3]>,
+    pub offsets: Option<Vec<[f64; 3]>>,
+    #[serde(default)]
+    pub body: Vec<Spanned<BodyDef>>,
+    #[serde(default)]
+    pub joint: Vec<Spanned<JointDef>>,
+    #[serde(default)]
+    pub spring: Vec<Spanned<SpringDef>>,
+}
+
+/// `[[actuator]]`: a named input.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct ActuatorDef {
+    pub name: String,
+    #[serde(rename = "type")]
+    pub kind: String,
+    #[serde(default)]
+    pub joints: Vec<String>,
+    pub coupling: Option<String>,
+    pub scale: Option<Vec<f64>>,
+    pub axis: Option<String>,
+    pub max_force: f64,
+    pub max_speed: Option<f64>,
+    pub range: Option<[f64; 2]>,
+    pub neutral: Option<f64>,
+    pub initial: Option<f64>,
+    pub rate: Option<f64>,
+}
+
+/// `[joystick]`: the default mapping of a gamepad to actuators.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct JoystickDef {
+    #[serde(default)]
+    pub axis: Vec<Spanned<JoyAxisDef>>,
+    #[serde(default)]
+    pub button: Vec<Spanned<JoyButtonDef>>,
+}
+
+/// `[[joystick.axis]]`.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct JoyAxisDef {
+    pub index: usize,
+    pub actuator: String,
+    pub scale: Option<f64>,
+    pub deadzone: Option<f64>,
+    pub mode: Option<String>,
+}
+
+/// `[[joystick.button]]`.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct JoyButtonDef {
+    pub index: usize,
+    pub actuator: Option<String>,
+    pub value: Option<f64>,
+    pub event: Option<String>,
+    pub joint: Option<String>,
+}
+
+/// `[[script]]`: a timed entry of the operator timeline.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct ScriptDef {
+    pub t: f64,
+    #[serde(default)]
+    pub set: BTreeMap<String, f64>,
+    pub ramp: Option<f64>,
+    pub event: Option<String>,
+    pub joint: Option<String>,
+}

@@ -1,0 +1,207 @@
+//! Scene files: the human-editable description of a machine and its world (TOML, specified in
+//! `scenes/README.md`), loaded into a [`World`] with its named actuators ([`Controls`]), default
+//! joystick mapping ([`JoystickMap`]) and scripted operator timeline ([`Script`]).
+//!
+//! | file | concept |
+//! |---|---|
+//! | `format.rs` | the file's syntax as serde types (unknown fields refused) |
+//! | `build.rs` | checks and builds: repeats, references, inertia from shapes, errors with locations |
+//! | `terrain.rs` | terrain shape types (heightfield, stairs, hills, trimesh) and the material table |
+//! | `controls.rs` | actuators, joystick mapping, timeline |
+//! | `builtin.rs` | the scenes shipped in `scenes/`, embedded in the binary |
+//!
+//! Loading is all or nothing: the world is built in a local and handed out only when every table
+//! passed, so a bad scene never half-loads. Every error names the file, line and column of the
+//! offending table or value and the field ([`SceneError`]).
+//!
+//! ```
+//! let mut scene = pivotsim_server::scene::load_str("inline", r#"
+//!     [scene]
+//!     name = "drop"
+//!     [[body]]
+//!     name = "ball"
+//!     mass = 1.0
+//!     position = [0, 0, 2]
+//!     [[body.shape]]
+//!     type = "ball"
+//!     radius = 0.1
+//! "#)?;
+//! scene.step()?;
+//! assert!(scene.world.body_id("ball").is_some());
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
+
+mod build;
+mod builtin;
+mod controls;
+mod format;
+mod terrain;
+
+use std::fmt;
+use std::path::Path;
+
+use thiserror::Error;
+
+pub use builtin::{BUILTIN, BuiltinScene, builtin};
+pub use controls::{
+    Actuator, ActuatorKind, ActuatorTarget, AxisMode, ButtonAction, Controls, InputError, JoyAxis, JoyButton,
+    JoystickError, JoystickMap, Neutral, SceneEvent, Script, ScriptEntry,
+};
+
+use crate::dynamics::{ControlError, ModelError, StepError, World};
+
+/// A place in a scene file (1-based line and column).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Location {
+    /// File path or `builtin:<name>`.
+    pub file: String,
+    /// Line.
+    pub line: usize,
+    /// Column (bytes).
+    pub column: usize,
+}
+
+impl fmt::Display for Location {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}:{}:{}", self.file, self.line, self.column)
+    }
+}
+
+/// Why a scene did not load.
+#[derive(Debug, Error)]
+pub enum SceneError {
+    /// The file could not be read.
+    #[error("{file}: cannot read the scene: {source}")]
+    Io {
+        /// The path.
+        file: String,
+        /// The cause.
+        source: std::io::Error,
+    },
+    /// TOML syntax, a wrong type, an unknown or missing field.
+    #[error("{at}: {message}")]
+    Syntax {
+        /// Where.
+        at: Location,
+        /// What the parser said.
+        message: String,
+    },
+    /// A value that parses but means nothing (a missing body, a bad number, a conflict).
+    #[error("{at}: `{field}`: {message}")]
+    Invalid {
+        /// Where (the table holding the field).
+        at: Location,
+        /// The field.
+        field: String,
+        /// What is wrong.
+        message: String,
+    },
+    /// The dynamics refused an item.
+    #[error("{at}: `{item}`: {source}")]
+    Model {
+        /// Where.
+        at: Location,
+        /// The item's name.
+        item: String,
+        /// The dynamics' typed error.
+        source: Box<ModelError>,
+    },
+    /// Neither a built-in scene nor a readable file.
+    #[error("no built-in scene `{name}` and no such file (built-in: {known})")]
+    Unknown {
+        /// What was asked for.
+        name: String,
+        /// The built-in names.
+        known: String,
+    },
+}
+
+impl SceneError {
+    /// The location, when the error has one.
+    pub fn location(&self) -> Option<&Location> {
+        match self {
+            SceneError::Syntax { at, .. } | SceneError::Invalid { at, .. } | SceneError::Model { at, .. } => {
+                Some(at)
+            }
+            _ => None,
+        }
+    }
+}
+
+/// Why a scene's step failed.
+#[derive(Debug, Error)]
+pub enum SceneStepError {
+    /// An actuator or event was refused by the world.
+    #[error(transparent)]
+    Control(#[from] ControlError),
+    /// The step failed.
+    #[error(transparent)]
+    Step(#[from] StepError),
+}
+
+/// A loaded scene: the world, its inputs and its timeline.
+#[derive(Debug)]
+pub struct Scene {
+    /// Name (`[scene] name`).
+    pub name: String,
+    /// One-line description.
+    pub description: String,
+    /// Where it came from (path or `builtin:<name>`).
+    pub source: String,
+    /// Default run length (s).
+    pub duration: f64,
+    /// The world.
+    pub world: World,
+    /// Named actuators.
+    pub controls: Controls,
+    /// Scripted operator timeline.
+    pub script: Script,
+    /// Default joystick mapping.
+    pub joystick: JoystickMap,
+}
+
+impl Scene {
+    /// One step driven by the script: fires the timeline entries due now, applies the actuators,
+    /// steps the world.
+    pub fn step(&mut self) -> Result<(), SceneStepError> {
+        let t = self.world.time();
+        self.script.advance(t, &mut self.controls, &mut self.world)?;
+        self.step_manual()
+    }
+
+    /// One step without the script (an operator drives the actuators).
+    pub fn step_manual(&mut self) -> Result<(), SceneStepError> {
+        let h = self.world.settings().timestep;
+        self.controls.apply(&mut self.world, h)?;
+        self.world.step()?;
+        Ok(())
+    }
+}
+
+/// Loads a scene from text; `file` labels error locations.
+pub fn load_str(file: &str, text: &str) -> Result<Scene, SceneError> {
+    build::build(file, text)
+}
+
+/// Loads a scene file.
+pub fn load_file(path: &Path) -> Result<Scene, SceneError> {
+    let file = path.display().to_string();
+    let text =
+        std::fs::read_to_string(path).map_err(|source| SceneError::Io { file: file.clone(), source })?;
+    load_str(&file, &text)
+}
+
+/// Loads a built-in scene by name, or else a file by path.
+pub fn load(name_or_path: &str) -> Result<Scene, SceneError> {
+    if let Some(b) = builtin(name_or_path) {
+        return load_str(&format!("builtin:{}", b.name), b.text);
+    }
+    let path = Path::new(name_or_path);
+    if path.exists() {
+        return load_file(path);
+    }
+    Err(SceneError::Unknown {
+        name: name_or_path.to_string(),
+        known: BUILTIN.iter().map(|b| b.name).collect::<Vec<_>>().join(", "),
+    })
+}
