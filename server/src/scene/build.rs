@@ -248,7 +248,17 @@ impl Builder<'_> {
             "capsule" | "cylinder" => &["radius", "length"],
             "convex" => &["points"],
             "plane" => &["normal"],
-            _ => &[],
+            k if super::terrain::is_terrain(k) => &[],
+            other => {
+                return Err(self.invalid(
+                    span,
+                    "type",
+                    format!(
+                        "unknown shape type `{other}` (box, ball, capsule, cylinder, convex, plane{})",
+                        super::terrain::KINDS.iter().map(|k| format!(", {k}")).collect::<String>()
+                    ),
+                ));
+            }
         };
         let present = [
             ("size", s.size.is_some()),
@@ -300,17 +310,7 @@ impl Builder<'_> {
             "plane" => {
                 Shape::HalfSpace { normal: self.unit3(span, "normal", s.normal.unwrap_or([0.0, 0.0, 1.0]))? }
             }
-            k if terrain => super::terrain::shape(self, span, k, s)?,
-            other => {
-                return Err(self.invalid(
-                    span,
-                    "type",
-                    format!(
-                        "unknown shape type `{other}` (box, ball, capsule, cylinder, convex, plane, {})",
-                        super::terrain::KINDS.join(", ")
-                    ),
-                ));
-            }
+            k => super::terrain::shape(self, span, k, s)?,
         };
         let pose = Isometry3::from_parts(
             Translation3::from(self.vec3(span, "position", s.position)?),
