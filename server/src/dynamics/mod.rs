@@ -91,8 +91,9 @@ pub use body::{
 pub use buoyancy::{Buoyancy, BuoyancyPoint, Water, Wave};
 pub use chain::{Chain, ChainBuilder, ChainEnd, ChainShape};
 pub use contact::{
-    Collider, ColliderBuilder, ColliderId, CollisionGroups, ContactError, ContactReport, ContactSettings,
-    DEFAULT_CONTACT_COMPLIANCE, Material, Shape,
+    Bounds, Collider, ColliderBuilder, ColliderId, CollisionGroups, ContactError, ContactReport,
+    ContactSettings, DEFAULT_CONTACT_COMPLIANCE, DEFAULT_MATERIAL, MAX_TERRAIN_TRIANGLES, Material, Shape,
+    SweepAndPrune, terrain,
 };
 pub use coupling::{Coupling, CouplingBuilder, CouplingId, CouplingKind};
 pub use error::{

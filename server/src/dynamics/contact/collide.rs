@@ -1,28 +1,46 @@
-//! Broad phase (all collider pairs whose AABBs, grown by the margin, overlap) and narrow phase
-//! (parry's persistent contact manifolds, one cache per pair, reused from step to step).
+//! Broad phase (sweep and prune over the colliders' AABBs grown by the margin, `broad.rs`) and
+//! narrow phase (parry's persistent contact manifolds, one cache per pair of parts, reused from
+//! step to step).
 //!
-//! The broad phase is `O(n²)` in the number of colliders (fine for the scenes of this slice; a BVH
-//! or sweep and prune is issue 5's next step). Pair caches keep parry's manifolds and workspace;
-//! their points are cleared before each query, so that parry's contact tracking copies an empty list
-//! (it clones the old points, an allocation per pair and step otherwise; we track contacts by
-//! feature ids ourselves). A half-space against a ball or a polygonal-feature shape (cuboid,
-//! capsule, cylinder, convex hull) is computed here, as parry's `contact_manifold_halfspace_pfm`
-//! does (the support feature against the plane, one point per vertex within the margin) but without
-//! its per-call reallocation: a persisting pair allocates nothing once warm. Caches of pairs that
-//! separated are dropped.
+//! Pair caches keep parry's manifolds and workspace; their points are cleared before each query,
+//! so that parry's contact tracking copies an empty list (it clones the old points, an allocation
+//! per pair and step otherwise; we track contacts by feature ids ourselves). A half-space against a
+//! ball or a polygonal-feature shape (cuboid, capsule, cylinder, convex hull) is computed here, as
+//! parry's `contact_manifold_halfspace_pfm` does (the support feature against the plane, one point
+//! per vertex within the margin) but without its per-call reallocation: a persisting pair
+//! allocates nothing once warm. Caches of pairs that separated are dropped.
+//!
+//! **Terrain** (height field, triangle mesh) against a convex part is also computed here, with
+//! parry's pieces but not its composite-shape driver: the triangles under the convex part's AABB
+//! (in the terrain frame, grown by the margin; the height field's cells under it, the mesh's BVH
+//! leaves) each get a convex–triangle manifold (`contact_manifold_convex_convex`, with the
+//! triangle's pseudo-normals as normal constraints so internal edges do not catch), kept per
+//! triangle in a list sorted by triangle index. Parry's driver for height fields moves its manifold
+//! vector out and rebuilds it every call (an allocation per step for a resting body); this list
+//! keeps its manifolds in place and recycles those of triangles left behind, so a persisting
+//! contact allocates nothing. The triangle index tags the terrain side's feature ids (bits 2–29).
 
 use std::collections::{HashMap, HashSet};
 
 use nalgebra::Vector3;
+use parry3d_f64::bounding_volume::BoundingVolume;
 use parry3d_f64::math::{Pose, Vector};
+use parry3d_f64::query::details::{NormalConstraints, NormalConstraintsPair};
+use parry3d_f64::query::epa::EPA;
+use parry3d_f64::query::gjk::{self, CsoPoint, GJKResult, VoronoiSimplex};
 use parry3d_f64::query::{
     ContactManifold, ContactManifoldsWorkspace, DefaultQueryDispatcher, PersistentQueryDispatcher,
+    TrackedContact,
 };
-use parry3d_f64::shape::{PackedFeatureId, PolygonalFeature, SharedShape};
+use parry3d_f64::shape::{
+    HeightField, PackedFeatureId, PolygonalFeature, PolygonalFeatureMap, Shape as ParryShape, SharedShape,
+    TriMesh, Triangle, TrianglePseudoNormals,
+};
 
 use super::Collider;
+use super::broad::{Bounds, SweepAndPrune};
 use super::convert::{from_vec, to_pose};
-use super::shape::PART_SHIFT;
+use super::shape::{PART_SHIFT, TRIANGLE_SHIFT};
 use crate::dynamics::body::{BodyKind, RigidBody};
 use crate::dynamics::joint::Joint;
 
@@ -50,10 +68,16 @@ pub(crate) struct ContactPoint {
     pub t: [Vector3<f64>; 2],
 }
 
+type Manifold = ContactManifold<(), ()>;
+
 #[derive(Default)]
 struct PairCache {
-    manifolds: Vec<ContactManifold<(), ()>>,
+    manifolds: Vec<Manifold>,
     workspace: Option<ContactManifoldsWorkspace>,
+    /// Terrain pairs: the triangle of each manifold (ascending) and whether this step met it.
+    triangles: Vec<(u32, bool)>,
+    /// Terrain pairs: manifolds of triangles left behind, for reuse.
+    spare: Vec<Manifold>,
     stamp: u64,
 }
 
@@ -73,8 +97,12 @@ pub(crate) struct NarrowPhase {
     poses: Vec<Pose>,
     /// Index in `poses` of each collider's first part.
     first: Vec<usize>,
-    /// Each collider's AABB (the union of its parts'), grown by half the margin.
-    aabbs: Vec<(Vector, Vector)>,
+    /// Each collider's AABB (the union of its parts'), grown by half the margin; `None` if
+    /// unbounded (half-space).
+    bounds: Vec<Bounds>,
+    broad: SweepAndPrune,
+    /// EPA buffers of the convex–triangle queries, reused (penetrating resting contacts need EPA).
+    epa: EPA,
     /// Caches per (collider A, collider B, part of A, part of B).
     pairs: HashMap<(u32, u32, u32, u32), PairCache>,
     stamp: u64,
@@ -96,7 +124,7 @@ impl NarrowPhase {
     pub fn update(
         &mut self,
         colliders: &[Collider],
-        pair_friction: &HashMap<(u32, u32), f64>,
+        mu_of: impl Fn(usize, usize) -> f64,
         bodies: &[RigidBody],
         joints: &[Joint],
         connected: &HashSet<u32>,
@@ -106,7 +134,7 @@ impl NarrowPhase {
         self.points.clear();
         self.poses.clear();
         self.first.clear();
-        self.aabbs.clear();
+        self.bounds.clear();
         let grow = Vector::splat(0.5 * margin);
         for c in colliders {
             self.first.push(self.poses.len());
@@ -119,75 +147,74 @@ impl NarrowPhase {
                 hi = hi.max(aabb.maxs);
                 self.poses.push(pose);
             }
-            self.aabbs.push((lo - grow, hi + grow));
+            let bounded = !c.shape.is_unbounded();
+            self.bounds.push(bounded.then(|| (from_vec(lo - grow), from_vec(hi + grow))));
         }
         let dispatcher = DefaultQueryDispatcher;
-        for i in 0..colliders.len() {
-            for j in i + 1..colliders.len() {
-                let (ci, cj) = (&colliders[i], &colliders[j]);
-                let (bi, bj) = (ci.body.index(), cj.body.index());
-                let (ai, aj) = (&self.aabbs[i], &self.aabbs[j]);
-                let overlap = ai.0.cmple(aj.1).all() && aj.0.cmple(ai.1).all();
-                if bi == bj
-                    || !overlap
-                    || !ci.groups.interacts_with(cj.groups)
-                    || (bodies[bi].kind() != BodyKind::Dynamic && bodies[bj].kind() != BodyKind::Dynamic)
-                    || jointed(joints, connected, bi, bj)
-                {
-                    continue;
-                }
-                let mu = match pair_friction.get(&(i as u32, j as u32)) {
-                    Some(&mu) => mu,
-                    None => (ci.material.friction * cj.material.friction).sqrt(),
-                };
-                for (k, part_i) in ci.parts.iter().enumerate() {
-                    for (l, part_j) in cj.parts.iter().enumerate() {
-                        let (pi, pj) = (self.poses[self.first[i] + k], self.poses[self.first[j] + l]);
-                        // A compound's part index tags the feature ids (0 for other shapes).
-                        let tags = [(k as u32) << PART_SHIFT, (l as u32) << PART_SHIFT];
-                        let pair = Pair { ca: i as u32, cb: j as u32, a: bi, b: bj, mu, tags };
-                        let (si, sj) = (&part_i.parry, &part_j.parry);
-                        if halfspace_points(&pair, si, &pi, sj, &pj, margin, &mut self.points) {
-                            continue;
-                        }
-                        let key = (i as u32, j as u32, k as u32, l as u32);
-                        let cache = self.pairs.entry(key).or_default();
-                        cache.stamp = self.stamp;
-                        let pos12 = pi.inv_mul(&pj);
-                        for m in cache.manifolds.iter_mut() {
-                            m.points.clear();
-                        }
-                        let res = dispatcher.contact_manifolds(
-                            &pos12,
-                            si.as_ref(),
-                            sj.as_ref(),
-                            margin,
-                            &mut cache.manifolds,
-                            &mut cache.workspace,
-                        );
-                        if res.is_err() {
-                            continue; // unsupported pair (none among this slice's shapes)
-                        }
-                        for m in &cache.manifolds {
-                            let n = from_vec(pi.rotation * m.local_n1);
-                            for p in &m.points {
-                                if p.dist > margin {
-                                    continue;
-                                }
-                                self.points.push(ContactPoint {
-                                    ca: i as u32,
-                                    cb: j as u32,
-                                    a: bi,
-                                    b: bj,
-                                    features: [p.fid1.0 | tags[0], p.fid2.0 | tags[1]],
-                                    pa: from_vec(pi.transform_point(p.local_p1)),
-                                    pb: from_vec(pj.transform_point(p.local_p2)),
-                                    n,
-                                    dist: p.dist,
-                                    mu,
-                                    t: [Vector3::zeros(); 2],
-                                });
+        self.broad.update(&self.bounds);
+        for &(i, j) in self.broad.pairs() {
+            let (i, j) = (i as usize, j as usize);
+            let (ci, cj) = (&colliders[i], &colliders[j]);
+            let (bi, bj) = (ci.body.index(), cj.body.index());
+            if bi == bj
+                || !ci.groups.interacts_with(cj.groups)
+                || (bodies[bi].kind() != BodyKind::Dynamic && bodies[bj].kind() != BodyKind::Dynamic)
+                || jointed(joints, connected, bi, bj)
+            {
+                continue;
+            }
+            let mu = mu_of(i, j);
+            for (k, part_i) in ci.parts.iter().enumerate() {
+                for (l, part_j) in cj.parts.iter().enumerate() {
+                    let (pi, pj) = (self.poses[self.first[i] + k], self.poses[self.first[j] + l]);
+                    // A compound's part index tags the feature ids (0 for other shapes).
+                    let tags = [(k as u32) << PART_SHIFT, (l as u32) << PART_SHIFT];
+                    let pair = Pair { ca: i as u32, cb: j as u32, a: bi, b: bj, mu, tags };
+                    let (si, sj) = (&part_i.parry, &part_j.parry);
+                    if halfspace_points(&pair, si, &pi, sj, &pj, margin, &mut self.points) {
+                        continue;
+                    }
+                    let key = (i as u32, j as u32, k as u32, l as u32);
+                    let cache = self.pairs.entry(key).or_default();
+                    cache.stamp = self.stamp;
+                    let parts = [(si.as_ref(), &pi), (sj.as_ref(), &pj)];
+                    if terrain_points(&pair, parts, margin, cache, &mut self.epa, &mut self.points) {
+                        continue;
+                    }
+                    let pos12 = pi.inv_mul(&pj);
+                    for m in cache.manifolds.iter_mut() {
+                        m.points.clear();
+                    }
+                    let res = dispatcher.contact_manifolds(
+                        &pos12,
+                        si.as_ref(),
+                        sj.as_ref(),
+                        margin,
+                        &mut cache.manifolds,
+                        &mut cache.workspace,
+                    );
+                    if res.is_err() {
+                        continue; // unsupported pair (none among this slice's shapes)
+                    }
+                    for m in &cache.manifolds {
+                        let n = from_vec(pi.rotation * m.local_n1);
+                        for p in &m.points {
+                            if p.dist > margin {
+                                continue;
                             }
+                            self.points.push(ContactPoint {
+                                ca: i as u32,
+                                cb: j as u32,
+                                a: bi,
+                                b: bj,
+                                features: [p.fid1.0 | tags[0], p.fid2.0 | tags[1]],
+                                pa: from_vec(pi.transform_point(p.local_p1)),
+                                pb: from_vec(pj.transform_point(p.local_p2)),
+                                n,
+                                dist: p.dist,
+                                mu,
+                                t: [Vector3::zeros(); 2],
+                            });
                         }
                     }
                 }
@@ -266,4 +293,226 @@ fn halfspace_points(
         }
     }
     true
+}
+
+/// A terrain shape.
+#[derive(Clone, Copy)]
+enum Terrain<'a> {
+    Field(&'a HeightField),
+    Mesh(&'a TriMesh),
+}
+
+impl<'a> Terrain<'a> {
+    fn of(shape: &'a dyn ParryShape) -> Option<Self> {
+        shape.as_heightfield().map(Terrain::Field).or_else(|| shape.as_trimesh().map(Terrain::Mesh))
+    }
+
+    /// Calls `f` with the index, the triangle and its pseudo-normals of every triangle that may meet
+    /// the local AABB `aabb`.
+    fn for_each_triangle(
+        self,
+        aabb: &parry3d_f64::bounding_volume::Aabb,
+        f: &mut impl FnMut(u32, &Triangle, Option<TrianglePseudoNormals>),
+    ) {
+        match self {
+            Terrain::Field(hf) => hf.map_elements_in_local_aabb(aabb, &mut |id, tri| {
+                f(id, tri, hf.triangle_normal_constraints(id))
+            }),
+            Terrain::Mesh(mesh) => {
+                let n = mesh.num_triangles() as u32;
+                // The BVH may return padding indices past the last triangle (parry's SIMD lanes).
+                for id in mesh.bvh().intersect_aabb(aabb).filter(|&id| id < n) {
+                    f(id, &mesh.triangle(id), mesh.triangle_normal_constraints(id));
+                }
+            }
+        }
+    }
+}
+
+/// The feature id of a triangle's feature tagged with the triangle index.
+fn triangle_feature(fid: u32, triangle: u32) -> u32 {
+    const KIND: u32 = 0b11 << 30;
+    (fid & KIND) | (triangle << TRIANGLE_SHIFT) | (fid & ((1 << TRIANGLE_SHIFT) - 1))
+}
+
+/// Contact points of a terrain part against a convex part (either order), triangle by triangle
+/// (module doc); `false` if neither part is terrain.
+fn terrain_points(
+    pair: &Pair,
+    [(si, pi), (sj, pj)]: [(&dyn ParryShape, &Pose); 2],
+    margin: f64,
+    cache: &mut PairCache,
+    epa: &mut EPA,
+    out: &mut Vec<ContactPoint>,
+) -> bool {
+    let (terrain, pt, other, po, flipped) = match (Terrain::of(si), Terrain::of(sj)) {
+        (Some(t), None) => (t, pi, sj, pj, false),
+        (None, Some(t)) => (t, pj, si, pi, true),
+        _ => return false,
+    };
+    let dispatcher = DefaultQueryDispatcher;
+    let pos12 = pi.inv_mul(pj);
+    let aabb = other.compute_aabb(&pt.inv_mul(po)).loosened(margin);
+    let other_pfm = match (other.as_ball(), other.as_cuboid()) {
+        (None, None) => other.as_polygonal_feature_map(),
+        _ => None,
+    };
+    for t in cache.triangles.iter_mut() {
+        t.1 = false;
+    }
+    let (triangles, manifolds, spare) = (&mut cache.triangles, &mut cache.manifolds, &mut cache.spare);
+    terrain.for_each_triangle(&aabb, &mut |id, tri, normals| {
+        let slot = match triangles.binary_search_by_key(&id, |t| t.0) {
+            Ok(slot) => slot,
+            Err(slot) => {
+                triangles.insert(slot, (id, false));
+                manifolds.insert(slot, spare.pop().unwrap_or_default());
+                slot
+            }
+        };
+        triangles[slot].1 = true;
+        let manifold = &mut manifolds[slot];
+        manifold.points.clear();
+        let normals = normals.as_ref().map(|n| n as &dyn NormalConstraints);
+        let tri_pfm = (tri as &dyn PolygonalFeatureMap, 0.0);
+        match other_pfm {
+            // Polygonal-feature shapes other than the cuboid go through GJK/EPA with a reused EPA.
+            Some(pfm) if flipped => pfm_manifold(&pos12, pfm, None, tri_pfm, normals, margin, epa, manifold),
+            Some(pfm) => pfm_manifold(&pos12, tri_pfm, normals, pfm, None, margin, epa, manifold),
+            // Ball and cuboid: parry's dedicated queries (no EPA). Unsupported pairs (none among
+            // the convex shapes) leave the manifold empty.
+            None if flipped => {
+                let _ = dispatcher
+                    .contact_manifold_convex_convex(&pos12, other, tri, None, normals, margin, manifold);
+            }
+            None => {
+                let _ = dispatcher
+                    .contact_manifold_convex_convex(&pos12, tri, other, normals, None, margin, manifold);
+            }
+        }
+    });
+    for k in (0..triangles.len()).rev() {
+        if !triangles[k].1 {
+            triangles.remove(k);
+            let mut m = manifolds.remove(k);
+            m.points.clear();
+            spare.push(m);
+        }
+    }
+    let first = out.len();
+    for (&(triangle, _), m) in triangles.iter().zip(manifolds.iter()) {
+        let n = from_vec(pi.rotation * m.local_n1);
+        for p in &m.points {
+            if p.dist > margin {
+                continue;
+            }
+            let (pa, pb) =
+                (from_vec(pi.transform_point(p.local_p1)), from_vec(pj.transform_point(p.local_p2)));
+            // A point on an edge or vertex shared by triangles comes from each of them: with the
+            // same normal the rows are identical, keep the one of the lowest triangle.
+            let duplicate = out[first..].iter().any(|q| {
+                (q.pa - pa).norm_squared() <= SAME_POINT_SQ
+                    && (q.pb - pb).norm_squared() <= SAME_POINT_SQ
+                    && q.n.dot(&n) >= SAME_NORMAL_COS
+            });
+            if duplicate {
+                continue;
+            }
+            let features = if flipped {
+                [p.fid1.0 | pair.tags[0], triangle_feature(p.fid2.0, triangle)]
+            } else {
+                [triangle_feature(p.fid1.0, triangle), p.fid2.0 | pair.tags[1]]
+            };
+            out.push(ContactPoint {
+                ca: pair.ca,
+                cb: pair.cb,
+                a: pair.a,
+                b: pair.b,
+                features,
+                pa,
+                pb,
+                n,
+                dist: p.dist,
+                mu: pair.mu,
+                t: [Vector3::zeros(); 2],
+            });
+        }
+    }
+    true
+}
+
+/// Squared distance (m²) under which two terrain contact points are one (1 nm).
+const SAME_POINT_SQ: f64 = 1e-18;
+/// Cosine above which two terrain contact normals are one (≈ 1.4e-5 rad).
+const SAME_NORMAL_COS: f64 = 1.0 - 1e-10;
+
+/// The contact manifold of two polygonal-feature shapes (a convex part and a terrain triangle):
+/// GJK for the closest points within `prediction` (EPA in penetration, with the caller's reused
+/// EPA: parry's `contact_manifold_pfm_pfm` makes a new one, i.e. allocates, every time the shapes
+/// overlap, at every step of a resting contact), the normal projected into the normal cones
+/// (`nc1`, `nc2`: the triangle's pseudo-normals), then the support features of both shapes along
+/// it clipped against each other (parry's `PolygonalFeature::contacts`), round borders added.
+#[allow(clippy::too_many_arguments)]
+fn pfm_manifold(
+    pos12: &Pose,
+    (pfm1, border1): (&dyn PolygonalFeatureMap, f64),
+    nc1: Option<&dyn NormalConstraints>,
+    (pfm2, border2): (&dyn PolygonalFeatureMap, f64),
+    nc2: Option<&dyn NormalConstraints>,
+    prediction: f64,
+    epa: &mut EPA,
+    manifold: &mut Manifold,
+) {
+    manifold.points.clear();
+    // Start GJK from the last normal (coherence), else along the centres.
+    let dir0 =
+        manifold.local_n1.try_normalize().or_else(|| pos12.translation.try_normalize()).unwrap_or(Vector::X);
+    let mut simplex = VoronoiSimplex::new();
+    simplex.reset(CsoPoint::from_shapes(pos12, pfm1, pfm2, dir0));
+    let reach = prediction + border1 + border2;
+    let closest = match gjk::closest_points(pos12, pfm1, pfm2, reach, true, &mut simplex) {
+        GJKResult::Intersection => epa
+            .closest_points(pos12, pfm1, pfm2, &simplex)
+            .map_or(GJKResult::NoIntersection(Vector::X), |(p1, p2, n)| GJKResult::ClosestPoints(p1, p2, n)),
+        other => other,
+    };
+    let (p1, p2_1, dir) = match closest {
+        GJKResult::ClosestPoints(p1, p2_1, dir) => (p1, p2_1, dir),
+        GJKResult::NoIntersection(dir) => {
+            manifold.local_n1 = dir;
+            return;
+        }
+        _ => {
+            manifold.local_n1 = Vector::ZERO;
+            return;
+        }
+    };
+    // Signed distance of the cores (before the borders) along the unconstrained normal.
+    let depth = (p2_1 - p1).dot(dir);
+    let (mut n1, mut n2) = (dir, pos12.rotation.inverse() * -dir);
+    if !(nc1, nc2).project_local_normals(pos12, &mut n1, &mut n2) {
+        return; // the normal leaves the triangle's cone: no contact from this triangle
+    }
+    let (mut f1, mut f2) = (PolygonalFeature::default(), PolygonalFeature::default());
+    pfm1.local_support_feature_toward(n1, p1, &mut f1);
+    pfm2.local_support_feature_toward(n2, pos12.inverse_transform_point(p2_1), &mut f2);
+    PolygonalFeature::contacts(pos12, &pos12.inverse(), n1, n2, &f1, &f2, manifold, false);
+    if manifold.points.is_empty() && n1 == dir {
+        // Clipping found nothing (e.g. a curved feature's approximation): the closest pair itself.
+        let p2 = pos12.inverse_transform_point(p2_1);
+        let unknown = PackedFeatureId::UNKNOWN;
+        manifold.points.push(TrackedContact::new(p1, p2, unknown, unknown, depth));
+    }
+    if nc1.is_some() || nc2.is_some() {
+        // A projected normal can make clipped points far deeper than the true penetration (the
+        // other shape extends far along it): drop those.
+        manifold.points.retain(|p| depth >= 0.0 || p.dist >= 0.0 || p.dist >= 5.0 * depth);
+    }
+    for p in manifold.points.iter_mut() {
+        p.local_p1 += n1 * border1;
+        p.local_p2 += n2 * border2;
+        p.dist -= border1 + border2;
+    }
+    manifold.local_n1 = n1;
+    manifold.local_n2 = n2;
 }

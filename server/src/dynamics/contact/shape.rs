@@ -1,10 +1,11 @@
 //! Collision shapes in the dynamics' conventions (nalgebra, SI, body-frame, axial shapes along the
 //! body `z` axis like [`capsule_inertia`](crate::dynamics::capsule_inertia) and
-//! [`cylinder_inertia`](crate::dynamics::cylinder_inertia)), their validation, and their parry
-//! counterpart.
+//! [`cylinder_inertia`](crate::dynamics::cylinder_inertia), terrain with `z` up), their validation,
+//! and their parry counterpart.
 
-use nalgebra::{Isometry3, UnitQuaternion, Vector3};
-use parry3d_f64::shape::SharedShape;
+use nalgebra::{Isometry3, Matrix3, Rotation3, UnitQuaternion, Vector3};
+use parry3d_f64::shape::{HeightFieldFlags, SharedShape, TriMeshFlags};
+use parry3d_f64::utils::Array2;
 
 use super::ContactError;
 use super::convert::to_vec;
@@ -47,10 +48,44 @@ pub enum Shape {
         normal: Vector3<f64>,
     },
     /// Several bounded shapes, each at its pose in the collider frame (1 to 1024 parts; no
-    /// half-space or compound among them). Their union collides as one collider.
+    /// half-space, terrain or compound among them). Their union collides as one collider.
     Compound {
         /// The parts: pose in the collider frame and shape.
         parts: Vec<(Isometry3<f64>, Shape)>,
+    },
+    /// Terrain: a grid of heights over the collider's `x`–`y` plane, centred on its origin, `z` up
+    /// (the convention of the scene format's heightfield). Sample `(r, c)` (row `r < rows` along
+    /// `y`, column `c < cols` along `x`) is the vertex
+    ///
+    /// ```text
+    /// x = (c / (cols − 1) − ½) · scale.x,   y = (r / (rows − 1) − ½) · scale.y,   z = heights[r · cols + c] · scale.z
+    /// ```
+    ///
+    /// and each grid cell is two triangles. At least 2 rows and 2 columns, finite heights, scales
+    /// finite and > 0. Only on **static** bodies ([`ContactError::TerrainNotStatic`]); its surface
+    /// is one-sided (contacts come from above, `+z`), internal edges do not catch sliding bodies
+    /// (parry's pseudo-normals). [`terrain`](crate::dynamics::terrain) builds common ones.
+    HeightField {
+        /// Number of rows (samples along `y`), ≥ 2.
+        rows: usize,
+        /// Number of columns (samples along `x`), ≥ 2.
+        cols: usize,
+        /// `rows · cols` heights, row-major (`heights[r · cols + c]`), multiplied by `scale.z`.
+        heights: Vec<f64>,
+        /// Extent along `x` and `y` (m) and the height factor along `z`.
+        scale: Vector3<f64>,
+    },
+    /// Terrain: a triangle mesh in the collider frame. Triangles are counter-clockwise seen from
+    /// the side that collides (`(b − a) × (c − a)` is the outward normal); the surface is
+    /// one-sided and internal edges do not catch sliding bodies (parry's pseudo-normals; the
+    /// vertices of shared edges are merged). At least one triangle, finite vertices, indices in
+    /// range, no degenerate (zero-area) triangle. Only on **static** bodies
+    /// ([`ContactError::TerrainNotStatic`]).
+    TriMesh {
+        /// Vertices (m).
+        vertices: Vec<Vector3<f64>>,
+        /// Triangles as vertex indices.
+        indices: Vec<[u32; 3]>,
     },
 }
 
@@ -59,6 +94,14 @@ pub(crate) const MAX_PARTS: usize = 1024;
 
 /// Bit of a contact feature id where the part index of a compound starts.
 pub(crate) const PART_SHIFT: u32 = 20;
+
+/// Most triangles of a terrain shape (the triangle index takes bits 2–29 of a contact's feature
+/// ids on the terrain side).
+pub const MAX_TERRAIN_TRIANGLES: usize = 1 << 28;
+
+/// Bit of a terrain contact's feature id where the triangle index starts (bits 0–1 keep the
+/// triangle-local vertex, edge or face index, bits 30–31 parry's feature kind).
+pub(crate) const TRIANGLE_SHIFT: u32 = 2;
 
 /// One parry shape of a collider at its pose in the body frame (one per part of a compound).
 #[derive(Debug, Clone)]
@@ -85,12 +128,19 @@ impl Shape {
             Shape::ConvexHull { .. } => "convex hull",
             Shape::HalfSpace { .. } => "half-space",
             Shape::Compound { .. } => "compound",
+            Shape::HeightField { .. } => "height field",
+            Shape::TriMesh { .. } => "triangle mesh",
         }
     }
 
     /// Whether the shape has infinite extent (needs a non-dynamic body).
     pub fn is_unbounded(&self) -> bool {
         matches!(self, Shape::HalfSpace { .. })
+    }
+
+    /// Whether the shape is terrain (height field or triangle mesh: static bodies only).
+    pub fn is_terrain(&self) -> bool {
+        matches!(self, Shape::HeightField { .. } | Shape::TriMesh { .. })
     }
 
     /// Validates the shape and builds its parts for a collider at `offset` in the body frame (one
@@ -112,6 +162,9 @@ impl Shape {
         for (pose, part) in parts {
             if part.is_unbounded() {
                 return Err(bad("a part cannot be a half-space"));
+            }
+            if part.is_terrain() {
+                return Err(bad("a part cannot be a height field or a triangle mesh"));
             }
             if !valid_isometry(pose) {
                 return Err(bad("a part's pose is invalid"));
@@ -188,8 +241,92 @@ impl Shape {
                     reason: "a part cannot be a compound",
                 });
             }
+            Shape::HeightField { rows, cols, heights, scale } => {
+                (build_heightfield(collider, *rows, *cols, heights, scale)?, heightfield_rotation())
+            }
+            Shape::TriMesh { vertices, indices } => (build_trimesh(collider, vertices, indices)?, id),
         })
     }
+}
+
+/// The rotation from parry's height-field frame (`y` up, columns along `x`, rows along `z`) to the
+/// collider frame (`z` up): parry `x → y`, `y → z`, `z → x` (120° about `(1, 1, 1)`). Parry's
+/// row `i` (along its `z`) is then our column `c` (along `x`) and its column `j` our row `r`.
+pub(crate) fn heightfield_rotation() -> UnitQuaternion<f64> {
+    let m = Matrix3::from_columns(&[Vector3::y(), Vector3::z(), Vector3::x()]);
+    UnitQuaternion::from_rotation_matrix(&Rotation3::from_matrix_unchecked(m))
+}
+
+/// Validates a height field and builds parry's (in parry's frame, [`heightfield_rotation`]).
+fn build_heightfield(
+    collider: &str,
+    rows: usize,
+    cols: usize,
+    heights: &[f64],
+    scale: &Vector3<f64>,
+) -> Result<SharedShape, ContactError> {
+    let name = || collider.to_string();
+    if rows < 2 || cols < 2 {
+        return Err(ContactError::HeightFieldTooSmall { collider: name(), rows, cols });
+    }
+    let triangles = 2usize.saturating_mul(rows - 1).saturating_mul(cols - 1);
+    if triangles > MAX_TERRAIN_TRIANGLES {
+        return Err(ContactError::TerrainTooLarge { collider: name(), triangles });
+    }
+    if rows.checked_mul(cols) != Some(heights.len()) {
+        return Err(ContactError::HeightFieldSize { collider: name(), rows, cols, heights: heights.len() });
+    }
+    if let Some(index) = heights.iter().position(|h| !h.is_finite()) {
+        return Err(ContactError::NonFiniteHeight { collider: name(), row: index / cols, col: index % cols });
+    }
+    for (what, value) in [("scale x", scale.x), ("scale y", scale.y), ("scale z", scale.z)] {
+        if !(value.is_finite() && value > 0.0) {
+            return Err(ContactError::InvalidSize { collider: name(), what, value });
+        }
+    }
+    // Parry's `heights_zx` is column-major with `cols` rows (along its z = our x) and `rows`
+    // columns: entry (i = c, j = r) at `c + r · cols`, which is our row-major layout.
+    let grid = Array2::new(cols, rows, heights.to_vec());
+    let parry_scale = parry3d_f64::math::Vector::new(scale.y, scale.z, scale.x);
+    Ok(SharedShape::heightfield_with_flags(grid, parry_scale, HeightFieldFlags::FIX_INTERNAL_EDGES))
+}
+
+/// Validates a triangle mesh and builds parry's.
+fn build_trimesh(
+    collider: &str,
+    vertices: &[Vector3<f64>],
+    indices: &[[u32; 3]],
+) -> Result<SharedShape, ContactError> {
+    let name = || collider.to_string();
+    if indices.is_empty() || vertices.is_empty() {
+        return Err(ContactError::EmptyMesh { collider: name() });
+    }
+    if indices.len() > MAX_TERRAIN_TRIANGLES {
+        return Err(ContactError::TerrainTooLarge { collider: name(), triangles: indices.len() });
+    }
+    if let Some(index) = vertices.iter().position(|p| !p.iter().all(|c| c.is_finite())) {
+        return Err(ContactError::NonFiniteVertex { collider: name(), index });
+    }
+    for (triangle, tri) in indices.iter().enumerate() {
+        if let Some(&index) = tri.iter().find(|&&i| i as usize >= vertices.len()) {
+            return Err(ContactError::TriangleIndexOutOfRange {
+                collider: name(),
+                triangle,
+                index,
+                vertices: vertices.len(),
+            });
+        }
+        let [a, b, c] = tri.map(|i| vertices[i as usize]);
+        let longest = (b - a).norm_squared().max((c - b).norm_squared()).max((a - c).norm_squared());
+        // Twice the area against the squared longest edge: ≤ 1e-12 is a needle or a point.
+        if (b - a).cross(&(c - a)).norm() <= 1e-12 * longest || longest == 0.0 {
+            return Err(ContactError::DegenerateTriangle { collider: name(), triangle });
+        }
+    }
+    let verts = vertices.iter().map(to_vec).collect();
+    // FIX_INTERNAL_EDGES merges duplicate vertices and computes the edge pseudo-normals.
+    SharedShape::trimesh_with_flags(verts, indices.to_vec(), TriMeshFlags::FIX_INTERNAL_EDGES)
+        .map_err(|_| ContactError::EmptyMesh { collider: name() })
 }
 
 /// Whether the points span a volume (a tetrahedron of relative volume > 1e-9 exists): the far
