@@ -2,6 +2,9 @@
 //! slice (box, ball, lying capsule, standing cylinder, convex hull) resting on a height field,
 //! and the same on a triangle-mesh deck. The per-triangle manifolds of a terrain pair stay in place
 //! from step to step (parry's own height-field driver rebuilds its manifold vector every call).
+//! So do the convex pairs that need GJK/EPA (cylinder, capsule, hull on a slab and on each other):
+//! the EPA buffers are reused (parry's query builds a new EPA, ~11 allocations, per overlapping
+//! call).
 
 use nalgebra::{UnitQuaternion, Vector3};
 use pivotsim_server::dynamics::{
@@ -72,4 +75,52 @@ fn resting_terrain_contacts_allocate_nothing_once_warm() {
         }
         assert_eq!(per_step, 0.0, "{what}");
     }
+}
+
+#[test]
+fn resting_polygonal_pairs_allocate_nothing_once_warm() {
+    // Shapes that meet through GJK and, in penetration, EPA (a cylinder, a lying capsule and a
+    // convex hull on a slab; a cylinder on the hull): the EPA buffers are reused, where parry's
+    // own query builds a new EPA at every call.
+    let mut w = World::new(WorldSettings::default()).unwrap();
+    let g = w.add_body(BodyBuilder::static_body("ground")).unwrap();
+    w.add_collider(ColliderBuilder::new("ground", g, Shape::HalfSpace { normal: Vector3::z() })).unwrap();
+    let e = Vector3::new(1.0, 1.0, 0.1);
+    let slab =
+        w.add_body(BodyBuilder::dynamic("slab", 20.0, box_inertia(20.0, e)).position(Vector3::z() * 0.1));
+    w.add_collider(ColliderBuilder::new("slab", slab.unwrap(), Shape::Cuboid { half_extents: e })).unwrap();
+    let mut add = |name: &str, x: Vector3<f64>, q: UnitQuaternion<f64>, inertia: Vector3<f64>, s: Shape| {
+        let b = w.add_body(BodyBuilder::dynamic(name, 1.0, inertia).position(x).orientation(q)).unwrap();
+        w.add_collider(ColliderBuilder::new(name, b, s)).unwrap();
+    };
+    let id = UnitQuaternion::identity();
+    let cyl = Shape::Cylinder { radius: 0.2, half_length: 0.15 };
+    add("cylinder", Vector3::new(0.5, 0.5, 0.35), id, cylinder_inertia(1.0, 0.2, 0.15), cyl.clone());
+    let lying = UnitQuaternion::from_axis_angle(&Vector3::x_axis(), std::f64::consts::FRAC_PI_2);
+    let capsule = Shape::Capsule { radius: 0.1, half_length: 0.3 };
+    add("capsule", Vector3::new(-0.5, 0.4, 0.3), lying, capsule_inertia(1.0, 0.1, 0.3), capsule);
+    let sign = |i: i32, bit: i32| if i & bit == 0 { -1.0 } else { 1.0 };
+    let corners: Vec<_> =
+        (0..8).map(|i| Vector3::new(0.3 * sign(i, 1), 0.3 * sign(i, 2), 0.1 * sign(i, 4))).collect();
+    add(
+        "hull",
+        Vector3::new(0.0, -0.5, 0.3),
+        id,
+        Vector3::repeat(0.03),
+        Shape::ConvexHull { points: corners },
+    );
+    add("on hull", Vector3::new(0.0, -0.5, 0.55), id, cylinder_inertia(1.0, 0.2, 0.15), cyl);
+    for _ in 0..240 {
+        w.step().unwrap();
+    }
+    let per_step = allocations_per_call(20, || w.step().unwrap());
+    let points = w.contacts().count();
+    println!(
+        "cylinder, capsule, hull on a slab, cylinder on the hull: {per_step} allocations per step, {points} points"
+    );
+    for b in w.bodies().iter().skip(1) {
+        assert!(b.linvel().norm() < 1e-8 && b.angvel().norm() < 1e-7, "{} moves", b.name());
+    }
+    assert!(points >= 4 + 3 + 2 + 4 + 3, "{points} points");
+    assert_eq!(per_step, 0.0);
 }

@@ -8,17 +8,22 @@
 //! ball or a polygonal-feature shape (cuboid, capsule, cylinder, convex hull) is computed here, as
 //! parry's `contact_manifold_halfspace_pfm` does (the support feature against the plane, one point
 //! per vertex within the margin) but without its per-call reallocation: a persisting pair
-//! allocates nothing once warm. Caches of pairs that separated are dropped.
+//! allocates nothing once warm. Two convex parts that parry meets with `contact_manifold_pfm_pfm`
+//! (GJK, EPA in penetration, support features clipped) are computed here with the same steps but a
+//! reused EPA (parry builds a new one, allocating, at every overlapping call). Caches of pairs that
+//! separated are dropped.
 //!
 //! **Terrain** (height field, triangle mesh) against a convex part is also computed here, with
 //! parry's pieces but not its composite-shape driver: the triangles under the convex part's AABB
 //! (in the terrain frame, grown by the margin; the height field's cells under it, the mesh's BVH
-//! leaves) each get a convex–triangle manifold (`contact_manifold_convex_convex`, with the
-//! triangle's pseudo-normals as normal constraints so internal edges do not catch), kept per
-//! triangle in a list sorted by triangle index. Parry's driver for height fields moves its manifold
-//! vector out and rebuilds it every call (an allocation per step for a resting body); this list
-//! keeps its manifolds in place and recycles those of triangles left behind, so a persisting
-//! contact allocates nothing. The triangle index tags the terrain side's feature ids (bits 2–29).
+//! leaves) each get a convex–triangle manifold (ball and cuboid: parry's dedicated queries; the
+//! other shapes: [`pfm_manifold`] with the reused EPA), with the triangle's pseudo-normals as
+//! normal constraints so that internal edges do not catch, kept per triangle in a list sorted by
+//! triangle index. Parry's driver for height fields moves its manifold vector out and rebuilds it
+//! every call (an allocation per step for a resting body); this list keeps its manifolds in place
+//! and recycles those of triangles left behind, so a persisting contact allocates nothing. The
+//! triangle index tags the terrain side's feature ids (bits 2–29); a point that several triangles
+//! produce (a shared edge or vertex, same normal) is kept once, from the lowest triangle.
 
 use std::collections::{HashMap, HashSet};
 
@@ -33,8 +38,8 @@ use parry3d_f64::query::{
     TrackedContact,
 };
 use parry3d_f64::shape::{
-    HeightField, PackedFeatureId, PolygonalFeature, PolygonalFeatureMap, Shape as ParryShape, SharedShape,
-    TriMesh, Triangle, TrianglePseudoNormals,
+    HeightField, PackedFeatureId, PolygonalFeature, PolygonalFeatureMap, Shape as ParryShape, ShapeType,
+    SharedShape, TriMesh, Triangle, TrianglePseudoNormals,
 };
 
 use super::Collider;
@@ -185,16 +190,25 @@ impl NarrowPhase {
                     for m in cache.manifolds.iter_mut() {
                         m.points.clear();
                     }
-                    let res = dispatcher.contact_manifolds(
-                        &pos12,
-                        si.as_ref(),
-                        sj.as_ref(),
-                        margin,
-                        &mut cache.manifolds,
-                        &mut cache.workspace,
-                    );
-                    if res.is_err() {
-                        continue; // unsupported pair (none among this slice's shapes)
+                    if let Some((f1, f2)) = pfm_pair(si.as_ref(), sj.as_ref()) {
+                        // What parry's dispatcher does for these shapes, with the reused EPA.
+                        if cache.manifolds.is_empty() {
+                            cache.manifolds.push(Manifold::new());
+                        }
+                        let (m, epa) = (&mut cache.manifolds[0], &mut self.epa);
+                        pfm_manifold(&pos12, f1, None, f2, None, margin, ClosestPoint::Always, epa, m);
+                    } else {
+                        let res = dispatcher.contact_manifolds(
+                            &pos12,
+                            si.as_ref(),
+                            sj.as_ref(),
+                            margin,
+                            &mut cache.manifolds,
+                            &mut cache.workspace,
+                        );
+                        if res.is_err() {
+                            continue; // unsupported pair (none among this slice's shapes)
+                        }
                     }
                     for m in &cache.manifolds {
                         let n = from_vec(pi.rotation * m.local_n1);
@@ -377,8 +391,28 @@ fn terrain_points(
         let tri_pfm = (tri as &dyn PolygonalFeatureMap, 0.0);
         match other_pfm {
             // Polygonal-feature shapes other than the cuboid go through GJK/EPA with a reused EPA.
-            Some(pfm) if flipped => pfm_manifold(&pos12, pfm, None, tri_pfm, normals, margin, epa, manifold),
-            Some(pfm) => pfm_manifold(&pos12, tri_pfm, normals, pfm, None, margin, epa, manifold),
+            Some(pfm) if flipped => pfm_manifold(
+                &pos12,
+                pfm,
+                None,
+                tri_pfm,
+                normals,
+                margin,
+                ClosestPoint::IfNoneClipped,
+                epa,
+                manifold,
+            ),
+            Some(pfm) => pfm_manifold(
+                &pos12,
+                tri_pfm,
+                normals,
+                pfm,
+                None,
+                margin,
+                ClosestPoint::IfNoneClipped,
+                epa,
+                manifold,
+            ),
             // Ball and cuboid: parry's dedicated queries (no EPA). Unsupported pairs (none among
             // the convex shapes) leave the manifold empty.
             None if flipped => {
@@ -446,7 +480,40 @@ const SAME_POINT_SQ: f64 = 1e-18;
 /// Cosine above which two terrain contact normals are one (≈ 1.4e-5 rad).
 const SAME_NORMAL_COS: f64 = 1.0 - 1e-10;
 
-/// The contact manifold of two polygonal-feature shapes (a convex part and a terrain triangle):
+/// Whether [`pfm_manifold`] adds the closest pair of points (unknown features) to the clipped ones.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum ClosestPoint {
+    /// Always (parry's `contact_manifold_pfm_pfm`; two convex colliders).
+    Always,
+    /// Only if clipping found no point (terrain triangles).
+    IfNoneClipped,
+}
+
+/// The two polygonal-feature maps (with their round borders) of a pair of convex shapes that
+/// parry's dispatcher sends to `contact_manifold_pfm_pfm` (neither a ball, nor two cuboids, nor two
+/// capsules, none a half-space or composite); `None` for the other pairs.
+#[allow(clippy::type_complexity)]
+fn pfm_pair<'a>(
+    s1: &'a dyn ParryShape,
+    s2: &'a dyn ParryShape,
+) -> Option<((&'a dyn PolygonalFeatureMap, f64), (&'a dyn PolygonalFeatureMap, f64))> {
+    let (t1, t2) = (s1.shape_type(), s2.shape_type());
+    let special = t1 == ShapeType::Ball
+        || t2 == ShapeType::Ball
+        || t1 == ShapeType::HalfSpace
+        || t2 == ShapeType::HalfSpace
+        || (t1 == ShapeType::Cuboid && t2 == ShapeType::Cuboid)
+        || (t1 == ShapeType::Capsule && t2 == ShapeType::Capsule)
+        || s1.as_composite_shape().is_some()
+        || s2.as_composite_shape().is_some();
+    if special {
+        return None;
+    }
+    Some((s1.as_polygonal_feature_map()?, s2.as_polygonal_feature_map()?))
+}
+
+/// The contact manifold of two polygonal-feature shapes (two convex parts, or one and a terrain
+/// triangle):
 /// GJK for the closest points within `prediction` (EPA in penetration, with the caller's reused
 /// EPA: parry's `contact_manifold_pfm_pfm` makes a new one, i.e. allocates, every time the shapes
 /// overlap, at every step of a resting contact), the normal projected into the normal cones
@@ -460,6 +527,7 @@ fn pfm_manifold(
     (pfm2, border2): (&dyn PolygonalFeatureMap, f64),
     nc2: Option<&dyn NormalConstraints>,
     prediction: f64,
+    closest: ClosestPoint,
     epa: &mut EPA,
     manifold: &mut Manifold,
 ) {
@@ -470,13 +538,13 @@ fn pfm_manifold(
     let mut simplex = VoronoiSimplex::new();
     simplex.reset(CsoPoint::from_shapes(pos12, pfm1, pfm2, dir0));
     let reach = prediction + border1 + border2;
-    let closest = match gjk::closest_points(pos12, pfm1, pfm2, reach, true, &mut simplex) {
+    let found = match gjk::closest_points(pos12, pfm1, pfm2, reach, true, &mut simplex) {
         GJKResult::Intersection => epa
             .closest_points(pos12, pfm1, pfm2, &simplex)
             .map_or(GJKResult::NoIntersection(Vector::X), |(p1, p2, n)| GJKResult::ClosestPoints(p1, p2, n)),
         other => other,
     };
-    let (p1, p2_1, dir) = match closest {
+    let (p1, p2_1, dir) = match found {
         GJKResult::ClosestPoints(p1, p2_1, dir) => (p1, p2_1, dir),
         GJKResult::NoIntersection(dir) => {
             manifold.local_n1 = dir;
@@ -497,8 +565,9 @@ fn pfm_manifold(
     pfm1.local_support_feature_toward(n1, p1, &mut f1);
     pfm2.local_support_feature_toward(n2, pos12.inverse_transform_point(p2_1), &mut f2);
     PolygonalFeature::contacts(pos12, &pos12.inverse(), n1, n2, &f1, &f2, manifold, false);
-    if manifold.points.is_empty() && n1 == dir {
-        // Clipping found nothing (e.g. a curved feature's approximation): the closest pair itself.
+    if (closest == ClosestPoint::Always || manifold.points.is_empty()) && n1 == dir {
+        // The closest pair itself (for terrain only if clipping found nothing, e.g. against a
+        // curved feature's approximation: it duplicates a clipped point or adds an interior one).
         let p2 = pos12.inverse_transform_point(p2_1);
         let unknown = PackedFeatureId::UNKNOWN;
         manifold.points.push(TrackedContact::new(p1, p2, unknown, unknown, depth));
