@@ -6,4 +6,5 @@ pub mod dynamics;
 pub mod plot;
 pub mod run;
 pub mod scene;
+pub mod serve;
 pub mod solver;

@@ -1,8 +1,8 @@
 //! `pivotsim-server`: the CLI over the pivotsim library.
 //!
-//! Subcommands: `run` (a scene headless, as fast as possible), `scenes` (the built-in scenes),
-//! `solve` (one MLCP file), `pattern` (sparsity plots) and `bench-solver` (every variant on
-//! generated and shared problems). `serve` arrives with the server issue.
+//! Subcommands: `serve` (the default: a scene in real time over Zenoh and iceoryx2), `run` (a
+//! scene headless, as fast as possible), `scenes` (the built-in scenes), `solve` (one MLCP file),
+//! `pattern` (sparsity plots) and `bench-solver` (every variant on generated and shared problems).
 
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -21,6 +21,8 @@ struct Cli {
 
 #[derive(Debug, Subcommand)]
 enum Command {
+    /// Serve a scene in real time over Zenoh and iceoryx2 (the default command).
+    Serve(ServeArgs),
     /// Run a scene headless under its script, as fast as possible, and print a summary.
     Run {
         /// A built-in scene name (see `scenes`) or a scene file path.
@@ -103,6 +105,114 @@ enum Command {
     },
 }
 
+/// Options of `serve`.
+#[derive(Debug, clap::Args)]
+struct ServeArgs {
+    /// A built-in scene name (see `scenes`) or a scene file path.
+    #[arg(long, default_value = DEFAULT_SCENE)]
+    scene: String,
+    /// World name: keys are `pivotsim/<world>/...`.
+    #[arg(long, default_value = pivotsim_msgs::DEFAULT_WORLD)]
+    world: String,
+    /// Zenoh endpoints to listen on (repeatable).
+    #[arg(long, default_value = "tcp/127.0.0.1:7447")]
+    listen: Vec<String>,
+    /// Zenoh endpoints to connect to: routers or peers on other hosts (repeatable).
+    #[arg(long)]
+    connect: Vec<String>,
+    /// A Zenoh configuration file (JSON5) for multi-host rigs and routers.
+    #[arg(long)]
+    zenoh_config: Option<PathBuf>,
+    /// Turn Zenoh multicast scouting on (off by default: nothing leaves the given endpoints).
+    #[arg(long)]
+    multicast_scouting: bool,
+    /// Do not start Zenoh.
+    #[arg(long)]
+    no_zenoh: bool,
+    /// Do not start iceoryx2.
+    #[arg(long)]
+    no_iceoryx2: bool,
+    /// Simulated seconds per wall second.
+    #[arg(long, default_value_t = 1.0)]
+    rtf: f64,
+    /// Step as fast as possible instead of in real time.
+    #[arg(long)]
+    fast: bool,
+    /// Deadman timeout in milliseconds.
+    #[arg(long, default_value_t = 250)]
+    deadman_ms: u64,
+    /// Seconds between status lines (0: none; default 1 s on a terminal, none otherwise).
+    #[arg(long)]
+    status_interval: Option<f64>,
+    /// Stop after this many steps.
+    #[arg(long)]
+    steps: Option<u64>,
+    /// Start paused.
+    #[arg(long)]
+    paused: bool,
+}
+
+/// `serve`'s options alone (the command when no subcommand is given).
+#[derive(Debug, Parser)]
+struct ServeOnly {
+    #[command(flatten)]
+    args: ServeArgs,
+}
+
+/// The scene `serve` runs when none is given.
+const DEFAULT_SCENE: &str = "pendulum";
+
+fn serve(args: ServeArgs) -> anyhow::Result<()> {
+    use std::io::IsTerminal;
+    use std::sync::Arc;
+    use std::sync::atomic::{AtomicBool, Ordering};
+    use std::time::Duration;
+    let _ = tracing_subscriber::fmt()
+        .with_env_filter(
+            tracing_subscriber::EnvFilter::try_from_default_env()
+                .unwrap_or_else(|_| "info,zenoh=warn".into()),
+        )
+        .with_writer(std::io::stderr)
+        .try_init();
+    let status_interval = match args.status_interval {
+        Some(s) if s > 0.0 => Some(Duration::from_secs_f64(s)),
+        Some(_) => None,
+        None => std::io::stderr().is_terminal().then(|| Duration::from_secs(1)),
+    };
+    let config = pivotsim_server::serve::ServeConfig {
+        scene: args.scene,
+        world: args.world,
+        realtime_factor: if args.fast { None } else { Some(args.rtf) },
+        deadman: Duration::from_millis(args.deadman_ms),
+        zenoh: (!args.no_zenoh).then_some(pivotsim_server::serve::ZenohOptions {
+            listen: args.listen,
+            connect: args.connect,
+            config_file: args.zenoh_config,
+            multicast_scouting: args.multicast_scouting,
+        }),
+        iceoryx2: !args.no_iceoryx2,
+        status_interval,
+        max_steps: args.steps,
+        start_paused: args.paused,
+    };
+    let shutdown = Arc::new(AtomicBool::new(false));
+    let flag = shutdown.clone();
+    ctrlc::set_handler(move || flag.store(true, Ordering::Relaxed))
+        .context("cannot install the Ctrl-C handler")?;
+    let report = pivotsim_server::serve::run(&config, shutdown)?;
+    println!(
+        "{} steps, {:.2} s simulated in {:.2} s, {} overruns; inputs {} accepted, {} rejected, deadman trips {}",
+        report.steps,
+        report.sim_time,
+        report.wall_s,
+        report.overruns,
+        report.inputs.accepted,
+        report.inputs.rejected_total(),
+        report.inputs.deadman_trips
+    );
+    Ok(())
+}
+
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
@@ -132,12 +242,8 @@ fn main() -> ExitCode {
             let cfg = pivotsim_server::bench::BenchConfig::new(out, quick, data);
             pivotsim_server::bench::run(&cfg).map(|_| ())
         }
-        None => {
-            eprintln!(
-                "pivotsim-server: give a subcommand (see --help); the server itself arrives with the server issue"
-            );
-            return ExitCode::from(2);
-        }
+        Some(Command::Serve(args)) => serve(args),
+        None => serve(ServeOnly::parse_from(["pivotsim-server"]).args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -55,8 +55,8 @@ pub(super) struct Builder<'a> {
     body_spans: HashMap<String, Range<usize>>,
 }
 
-/// A built shape: the shape, its pose in the body frame and its friction.
-type ShapeParts = (Shape, Isometry3<f64>, Option<f64>);
+/// A built shape: the shape, its pose in the body frame, its friction and its material name.
+type ShapeParts = (Shape, Isometry3<f64>, Option<f64>, Option<String>);
 
 pub(super) type R<T> = Result<T, SceneError>;
 
@@ -220,13 +220,16 @@ impl Builder<'_> {
         let id = self.world.add_body(b).map_err(|e| self.model(span, &d.name, e))?;
         self.body_spans.insert(d.name.clone(), span.clone());
         let groups = d.groups.map(|[m, f]| CollisionGroups::new(m, f)).unwrap_or(CollisionGroups::ALL);
-        for (k, ((sspan, (shape, pose, mu)), def)) in shapes.into_iter().zip(&d.shape).enumerate() {
-            let name = if d.shape.len() == 1 { d.name.clone() } else { format!("{}#{k}", d.name) };
-            let _ = def;
-            let cb = ColliderBuilder::new(&name, id, shape)
+        let n_shapes = shapes.len();
+        for (k, (sspan, (shape, pose, mu, material))) in shapes.into_iter().enumerate() {
+            let name = if n_shapes == 1 { d.name.clone() } else { format!("{}#{k}", d.name) };
+            let mut cb = ColliderBuilder::new(&name, id, shape)
                 .offset(pose)
                 .material(Material { friction: mu.unwrap_or(self.default_mu) })
                 .groups(groups);
+            if let Some(m) = material {
+                cb = cb.material_name(&m);
+            }
             self.world.add_collider(cb).map_err(|e| SceneError::Invalid {
                 at: self.src.at(sspan.clone()),
                 field: "shape".into(),
@@ -317,7 +320,7 @@ impl Builder<'_> {
             self.rotation(span, s.rotation, None)?,
         );
         let mu = s.friction.map(|m| self.non_negative(span, "friction", m)).transpose()?;
-        Ok((shape, pose, mu))
+        Ok((shape, pose, mu, s.material.clone()))
     }
 
     fn inertia_from_shapes(
@@ -328,7 +331,7 @@ impl Builder<'_> {
     ) -> R<(Vector3<f64>, UnitQuaternion<f64>)> {
         use std::f64::consts::PI;
         let mut parts = Vec::new();
-        for (sspan, (shape, pose, _)) in shapes {
+        for (sspan, (shape, pose, _, _)) in shapes {
             let (volume, unit): (f64, Vector3<f64>) = match shape {
                 Shape::Ball { radius: r } => (4.0 / 3.0 * PI * r.powi(3), sphere_inertia(1.0, *r)),
                 Shape::Cuboid { half_extents: e } => (8.0 * e.x * e.y * e.z, box_inertia(1.0, *e)),
@@ -569,6 +572,13 @@ pub(crate) fn build(file: &str, text: &str) -> R<Scene> {
             .map_err(|e| b.invalid(&sspan, "contact_compliance", e.to_string()))?;
     }
 
+    for m in &parsed.material {
+        let (span, d) = (m.span(), m.get_ref());
+        let mu = b.non_negative(&span, "friction", d.friction)?;
+        b.world
+            .set_material_friction(&d.a, &d.b, mu)
+            .map_err(|e| b.invalid(&span, "friction", e.to_string()))?;
+    }
     // Bodies first (plain, then repeated), then joints and springs, so that any order of tables works.
     let zero = Vector3::zeros();
     for d in &parsed.body {
@@ -793,6 +803,9 @@ fn actuators(b: &Builder, defs: &[Spanned<ActuatorDef>]) -> R<Controls> {
             (None, _) => Neutral::Value(0.0),
         };
         let rate = d.rate.map(|r| b.positive(&span, "rate", r)).transpose()?;
+        if d.winch && kind != ActuatorKind::Velocity {
+            return Err(b.invalid(&span, "winch", "only a velocity actuator can be a winch"));
+        }
         let mut act = Actuator {
             name: d.name.clone(),
             kind,
@@ -803,6 +816,7 @@ fn actuators(b: &Builder, defs: &[Spanned<ActuatorDef>]) -> R<Controls> {
             range,
             neutral,
             rate,
+            winch: d.winch,
             value: 0.0,
             applied: 0.0,
             initial: 0.0,

@@ -84,6 +84,8 @@ pub struct Actuator {
     pub(crate) range: (f64, f64),
     pub(crate) neutral: Neutral,
     pub(crate) rate: Option<f64>,
+    /// A cable drum: takes winch commands on the wire.
+    pub(crate) winch: bool,
     /// Commanded value.
     pub(crate) value: f64,
     /// Value applied in the last step (follows `value` at `rate`).
@@ -120,6 +122,18 @@ impl Actuator {
     /// Neutral.
     pub fn neutral(&self) -> Neutral {
         self.neutral
+    }
+    /// Force (N) or torque (N m) bound.
+    pub fn max_force(&self) -> f64 {
+        self.max_force
+    }
+    /// Whether it is a cable drum (takes winch commands).
+    pub fn is_winch(&self) -> bool {
+        self.winch
+    }
+    /// Scale of the first target (1 for a clutch): physical speed or target per unit of value.
+    pub fn unit_scale(&self) -> f64 {
+        self.targets.first().map_or(1.0, |t| t.scale)
     }
 }
 

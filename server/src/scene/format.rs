@@ -13,6 +13,8 @@ use toml::Spanned;
 pub(crate) struct SceneFile {
     pub scene: Spanned<SceneSection>,
     #[serde(default)]
+    pub material: Vec<Spanned<MaterialDef>>,
+    #[serde(default)]
     pub body: Vec<Spanned<BodyDef>>,
     #[serde(default)]
     pub joint: Vec<Spanned<JointDef>>,
@@ -50,6 +52,15 @@ pub(crate) struct SceneSection {
     pub gyroscopic: Option<bool>,
 }
 
+/// `[[material]]`: friction of a pair of named materials.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct MaterialDef {
+    pub a: String,
+    pub b: String,
+    pub friction: f64,
+}
+
 /// `[[body]]` (also inside `[[repeat]]`).
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -85,6 +96,7 @@ pub(crate) struct ShapeDef {
     pub position: [f64; 3],
     pub rotation: Option<[f64; 3]>,
     pub friction: Option<f64>,
+    pub material: Option<String>,
     /// Heightfield: rows of heights (m), `size` its x/y extent and a z scale.
     pub heights: Option<Vec<Vec<f64>>>,
     /// Stairs: step count, rise and run (m); width from `size[1]`.
@@ -187,6 +199,7 @@ pub(crate) struct ActuatorDef {
     #[serde(default)]
     pub joints: Vec<String>,
     pub coupling: Option<String>,
+    #[serde(default, deserialize_with = "one_or_many")]
     pub scale: Option<Vec<f64>>,
     pub axis: Option<String>,
     pub max_force: f64,
@@ -195,6 +208,22 @@ pub(crate) struct ActuatorDef {
     pub neutral: Option<f64>,
     pub initial: Option<f64>,
     pub rate: Option<f64>,
+    #[serde(default)]
+    pub winch: bool,
+}
+
+/// `scale = 2.0` or `scale = [2.0, -2.0]` (README: one number or one per joint).
+fn one_or_many<'de, D: serde::Deserializer<'de>>(d: D) -> Result<Option<Vec<f64>>, D::Error> {
+    #[derive(Deserialize)]
+    #[serde(untagged)]
+    enum OneOrMany {
+        One(f64),
+        Many(Vec<f64>),
+    }
+    Ok(Some(match OneOrMany::deserialize(d)? {
+        OneOrMany::One(x) => vec![x],
+        OneOrMany::Many(v) => v,
+    }))
 }
 
 /// `[joystick]`: the default mapping of a gamepad to actuators.

@@ -478,6 +478,8 @@ pub struct Collider {
     pub(crate) groups: CollisionGroups,
     /// Its parry shapes (one unless a compound) at their poses in the body frame.
     pub(crate) parts: Vec<shape::ColliderPart>,
+    /// Pose of the collider frame in the body frame.
+    pub(crate) offset: Isometry3<f64>,
 }
 
 impl Collider {
@@ -504,6 +506,11 @@ impl Collider {
     /// Its collision groups.
     pub fn groups(&self) -> CollisionGroups {
         self.groups
+    }
+
+    /// Pose of the collider frame (where [`Collider::shape`] is given) in the body frame.
+    pub fn offset(&self) -> Isometry3<f64> {
+        self.offset
     }
 }
 
@@ -613,6 +620,7 @@ impl World {
             material_name: cb.material_name,
             groups: cb.groups,
             parts,
+            offset: cb.offset,
         });
         Ok(id)
     }

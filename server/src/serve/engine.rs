@@ -1,0 +1,481 @@
+//! The server's state machine, free of any transport: a scene, the operator inputs (validated,
+//! latest-wins per source, deadman), control requests, and the encoded pose and stats frames of
+//! every step. The transports only move bytes in and out of it, so that everything here is tested
+//! in-process and bit for bit.
+//!
+//! **Inputs.** A frame is decoded and validated by `pivotsim-msgs` (NaN/Inf, ranges, sizes,
+//! version, kind on its key), its sequence must be newer than the last accepted one of its source
+//! (else *stale*), and every actuator it names must exist with the right kind; a rejected input is
+//! counted by reason in the stats and changes nothing. Wire values are in physical units and
+//! converted to actuator values (`describe.rs`): a winch or velocity command sets a speed, a boom
+//! command on a position actuator moves its target at the given rate, an actuator command sets
+//! its value in its own mode, a joystick goes through the scene's mapping.
+//!
+//! **Script and deadman.** Until the first accepted input the scene's scripted timeline drives the
+//! actuators. From then on the operator does, and if no input is accepted for the deadman timeout
+//! every actuator goes to its neutral (velocity motors hold, position motors hold where they are,
+//! brakes on, clutches open), the boom rates stop, and the stats say so until the next input.
+//! `reset` and `load_scene` hand control back to the script.
+
+use std::collections::HashMap;
+use std::time::{Duration, Instant};
+
+use pivotsim_msgs as msgs;
+use tracing::{info, warn};
+
+use super::describe::{actuator_mode, describe};
+use crate::dynamics::BodyKind;
+use crate::scene::{self, ActuatorKind, Scene, SceneError};
+use crate::solver::Variant;
+
+/// What a control request or a transport needs from the engine's status.
+pub type Status = msgs::ServerStatus;
+
+/// The server's state (module doc).
+#[derive(Debug)]
+pub struct Engine {
+    scene_ref: String,
+    scene: Scene,
+    world_name: msgs::WorldName,
+    description: Vec<u8>,
+    paused: bool,
+    sequence: u64,
+    overruns: u32,
+    health: msgs::InputHealth,
+    last_seq: HashMap<u32, u64>,
+    manual: bool,
+    last_input: Option<Instant>,
+    deadman: Duration,
+    rates: Vec<f64>,
+    axes: [f64; msgs::MAX_AXES],
+    buttons: [bool; msgs::MAX_BUTTONS],
+    pose_buf: Vec<u8>,
+    stats: msgs::SolverStats,
+    stats_buf: Vec<u8>,
+    step_wall_us: f64,
+    failure: Option<String>,
+    generation: u64,
+}
+
+impl Engine {
+    /// Loads `scene_ref` (a built-in name or a path) for world `world_name`.
+    pub fn new(
+        scene_ref: &str,
+        world_name: msgs::WorldName,
+        deadman: Duration,
+    ) -> Result<Engine, SceneError> {
+        let scene = scene::load(scene_ref)?;
+        let mut e = Engine {
+            scene_ref: scene_ref.to_string(),
+            scene,
+            world_name,
+            description: Vec::new(),
+            paused: false,
+            sequence: 0,
+            overruns: 0,
+            health: msgs::InputHealth::default(),
+            last_seq: HashMap::new(),
+            manual: false,
+            last_input: None,
+            deadman,
+            rates: Vec::new(),
+            axes: [0.0; msgs::MAX_AXES],
+            buttons: [false; msgs::MAX_BUTTONS],
+            pose_buf: Vec::new(),
+            stats: msgs::SolverStats::default(),
+            stats_buf: Vec::new(),
+            step_wall_us: 0.0,
+            failure: None,
+            generation: 0,
+        };
+        e.scene_changed();
+        e.encode_frames(0);
+        Ok(e)
+    }
+
+    fn scene_changed(&mut self) {
+        self.generation += 1;
+        self.rates = vec![0.0; self.scene.controls.actuators().len()];
+        let d = describe(&self.scene, self.world_name.as_str());
+        self.description.clear();
+        if let Err(e) = d.encode(&mut self.description) {
+            warn!("scene description of `{}` does not fit the wire format: {e}", self.scene.name);
+            self.description.clear();
+        }
+        self.manual = false;
+        self.last_input = None;
+        self.health.deadman_active = false;
+        self.failure = None;
+    }
+
+    /// Changes whenever the scene (and so its description) is replaced or reset.
+    pub fn generation(&self) -> u64 {
+        self.generation
+    }
+
+    /// The loaded scene.
+    pub fn scene(&self) -> &Scene {
+        &self.scene
+    }
+
+    /// The encoded scene description (empty if the scene does not fit the wire format).
+    pub fn description(&self) -> &[u8] {
+        &self.description
+    }
+
+    /// The last step's encoded pose frame.
+    pub fn pose_frame(&self) -> &[u8] {
+        &self.pose_buf
+    }
+
+    /// The last step's encoded stats frame.
+    pub fn stats_frame(&self) -> &[u8] {
+        &self.stats_buf
+    }
+
+    /// Input counters.
+    pub fn health(&self) -> &msgs::InputHealth {
+        &self.health
+    }
+
+    /// Whether stepping is paused.
+    pub fn is_paused(&self) -> bool {
+        self.paused
+    }
+
+    /// Pauses or resumes.
+    pub fn set_paused(&mut self, paused: bool) {
+        self.paused = paused;
+    }
+
+    /// Why the world stopped, if a step failed (the world keeps its last good state, paused).
+    pub fn failure(&self) -> Option<&str> {
+        self.failure.as_deref()
+    }
+
+    /// Sequence number of the last step.
+    pub fn sequence(&self) -> u64 {
+        self.sequence
+    }
+
+    /// Counts an overrun of the real-time loop.
+    pub fn count_overrun(&mut self) {
+        self.overruns = self.overruns.saturating_add(1);
+    }
+
+    /// Counts an input dropped before it reached the engine (a full inbox).
+    pub fn count_dropped(&mut self) {
+        self.health.reject(msgs::RejectReason::Other);
+    }
+
+    /// The server state as a control reply reports it.
+    pub fn status(&self) -> Status {
+        Status {
+            scene: self.scene.name.clone(),
+            paused: self.paused,
+            sequence: self.sequence,
+            sim_time: self.scene.world.time(),
+            variant: msgs::SolverVariant::from_name(self.scene.world.settings().solver.variant.name())
+                .unwrap_or_default(),
+        }
+    }
+
+    /// Validates and applies one input frame that arrived on `topic` (`None`: trust the frame's
+    /// kind, e.g. a single-service transport); a rejection is counted and changes nothing.
+    pub fn handle_input(
+        &mut self,
+        topic: Option<msgs::Topic>,
+        bytes: &[u8],
+        now: Instant,
+    ) -> Result<(), msgs::RejectReason> {
+        let r = self.try_input(topic, bytes, now);
+        match r {
+            Ok(()) => self.health.accepted = self.health.accepted.saturating_add(1),
+            Err(reason) => self.health.reject(reason),
+        }
+        r
+    }
+
+    fn try_input(
+        &mut self,
+        topic: Option<msgs::Topic>,
+        bytes: &[u8],
+        now: Instant,
+    ) -> Result<(), msgs::RejectReason> {
+        if let Some(t) = topic {
+            let h = msgs::header::peek(bytes).map_err(|e| e.reject_reason())?;
+            if Some(h.kind) != t.kind() {
+                return Err(msgs::RejectReason::Version);
+            }
+        }
+        let cmd = msgs::InputCommand::decode(bytes).map_err(|e| e.reject_reason())?;
+        if self.last_seq.get(&cmd.source_id()).is_some_and(|&last| cmd.sequence() <= last) {
+            return Err(msgs::RejectReason::Stale);
+        }
+        self.apply_input(&cmd)?;
+        self.last_seq.insert(cmd.source_id(), cmd.sequence());
+        self.manual = true;
+        self.last_input = Some(now);
+        self.health.deadman_active = false;
+        Ok(())
+    }
+
+    /// Actuator index of a wire name with the wire mode it accepts.
+    fn actuator(&self, name: &str) -> Result<usize, msgs::RejectReason> {
+        self.scene.controls.index(name).ok_or(msgs::RejectReason::UnknownActuator)
+    }
+
+    fn apply_input(&mut self, cmd: &msgs::InputCommand) -> Result<(), msgs::RejectReason> {
+        let unknown = msgs::RejectReason::UnknownActuator;
+        let controls = &self.scene.controls;
+        // Check everything first, then apply: an input is all or nothing.
+        let mut sets: [(usize, f64, bool); msgs::MAX_BOOM_TARGETS] =
+            [(0, 0.0, false); msgs::MAX_BOOM_TARGETS];
+        let mut n = 0;
+        match cmd {
+            msgs::InputCommand::Joystick(j) => {
+                for (dst, &a) in self.axes.iter_mut().zip(j.axes.iter()) {
+                    *dst = f64::from(a);
+                }
+                for (i, b) in self.buttons.iter_mut().enumerate() {
+                    *b = j.button(i);
+                }
+                let h = self.scene.world.settings().timestep;
+                let sc = &mut self.scene;
+                return sc
+                    .joystick
+                    .apply(&self.axes, &self.buttons, h, &mut sc.controls, &mut sc.world)
+                    .map_err(|_| msgs::RejectReason::Other);
+            }
+            msgs::InputCommand::Winch(w) => {
+                let i = self.actuator(w.actuator.as_str())?;
+                if !controls.actuators()[i].is_winch() {
+                    return Err(unknown);
+                }
+                sets[0] = (i, w.drum_speed / controls.actuators()[i].unit_scale(), false);
+                n = 1;
+            }
+            msgs::InputCommand::Boom(b) => {
+                for t in &b.targets {
+                    let i = self.actuator(t.actuator.as_str())?;
+                    let a = &controls.actuators()[i];
+                    let v = t.value / a.unit_scale();
+                    sets[n] = match a.kind() {
+                        ActuatorKind::Velocity => (i, v, false),
+                        ActuatorKind::Position => (i, v, true),
+                        _ => return Err(unknown),
+                    };
+                    n += 1;
+                }
+            }
+            msgs::InputCommand::Actuator(c) => {
+                let i = self.actuator(c.actuator.as_str())?;
+                let a = &controls.actuators()[i];
+                if actuator_mode(a.kind()) != c.mode {
+                    return Err(unknown);
+                }
+                let v = match a.kind() {
+                    ActuatorKind::Brake | ActuatorKind::Clutch if a.max_force() > 0.0 => {
+                        c.value / a.max_force()
+                    }
+                    ActuatorKind::Brake | ActuatorKind::Clutch => 0.0,
+                    _ => c.value / a.unit_scale(),
+                };
+                sets[0] = (i, v, false);
+                n = 1;
+            }
+        }
+        if sets[..n].iter().any(|s| !s.1.is_finite()) {
+            return Err(msgs::RejectReason::NonFinite);
+        }
+        for &(i, v, rate) in &sets[..n] {
+            if rate {
+                self.rates[i] = v;
+            } else {
+                self.rates[i] = 0.0;
+                self.scene.controls.set_index(i, v).map_err(|_| msgs::RejectReason::NonFinite)?;
+            }
+        }
+        Ok(())
+    }
+
+    /// Decodes a control request, carries it out and returns the encoded reply.
+    pub fn handle_control(&mut self, bytes: &[u8]) -> Vec<u8> {
+        let reply = match msgs::ControlRequest::decode(bytes) {
+            Err(e) => msgs::ControlReply::error(0, msgs::ControlErrorCode::InvalidRequest, e.to_string()),
+            Ok(req) => match self.control(&req.command) {
+                Ok(()) => msgs::ControlReply::ok(req.id, self.status()),
+                Err((code, msg)) => msgs::ControlReply::error(req.id, code, msg),
+            },
+        };
+        let mut buf = Vec::new();
+        if let Err(e) = reply.encode(&mut buf) {
+            // A message too long for the wire: say so briefly instead.
+            let r =
+                msgs::ControlReply::error(reply.id, msgs::ControlErrorCode::Internal, format!("reply: {e}"));
+            buf.clear();
+            let _ = r.encode(&mut buf);
+        }
+        buf
+    }
+
+    fn control(&mut self, cmd: &msgs::ControlCommand) -> Result<(), (msgs::ControlErrorCode, String)> {
+        use msgs::ControlCommand as C;
+        use msgs::ControlErrorCode as E;
+        match cmd {
+            C::Pause => self.paused = true,
+            C::Resume => {
+                self.paused = false;
+                self.failure = None;
+            }
+            C::Step { count } => {
+                if !self.paused {
+                    return Err((E::Busy, "`step` needs a paused world".into()));
+                }
+                for _ in 0..*count {
+                    if !self.step_once() {
+                        break;
+                    }
+                }
+                self.encode_frames(wall_ns());
+            }
+            C::Reset => {
+                let scene_ref = self.scene_ref.clone();
+                self.load(&scene_ref)?;
+            }
+            C::SetVariant { variant } => {
+                let v: Variant = variant.name().parse().map_err(|e| (E::UnknownVariant, format!("{e}")))?;
+                let mut s = *self.scene.world.settings();
+                s.solver.variant = v;
+                self.scene.world.set_settings(s).map_err(|e| (E::Internal, e.to_string()))?;
+                info!("solver variant switched to {}", v.name());
+            }
+            C::LoadScene { scene } => self.load(scene)?,
+        }
+        Ok(())
+    }
+
+    fn load(&mut self, scene_ref: &str) -> Result<(), (msgs::ControlErrorCode, String)> {
+        let variant = self.scene.world.settings().solver.variant;
+        let mut sc = scene::load(scene_ref).map_err(|e| match e {
+            SceneError::Unknown { .. } => (msgs::ControlErrorCode::UnknownScene, e.to_string()),
+            _ => (msgs::ControlErrorCode::SceneLoadFailed, e.to_string()),
+        })?;
+        // The live variant carries over to the new scene.
+        let mut s = *sc.world.settings();
+        s.solver.variant = variant;
+        sc.world.set_settings(s).map_err(|e| (msgs::ControlErrorCode::Internal, e.to_string()))?;
+        info!("scene `{}` loaded from {}", sc.name, sc.source);
+        self.scene = sc;
+        self.scene_ref = scene_ref.to_string();
+        self.paused = true;
+        self.scene_changed();
+        self.encode_frames(wall_ns());
+        Ok(())
+    }
+
+    /// One tick of the loop at time `now`: the deadman, then a step unless paused, then the frames.
+    /// Returns whether a step was taken.
+    pub fn tick(&mut self, now: Instant) -> bool {
+        if self.manual && !self.health.deadman_active {
+            let silent = self.last_input.is_none_or(|t| now.saturating_duration_since(t) > self.deadman);
+            if silent {
+                self.scene.controls.neutralize(&self.scene.world);
+                self.rates.iter_mut().for_each(|r| *r = 0.0);
+                self.health.deadman_active = true;
+                self.health.deadman_trips = self.health.deadman_trips.saturating_add(1);
+                info!("deadman: no input for {:?}, actuators at neutral", self.deadman);
+            }
+        }
+        if self.paused {
+            return false;
+        }
+        let stepped = self.step_once();
+        self.encode_frames(wall_ns());
+        stepped
+    }
+
+    fn step_once(&mut self) -> bool {
+        let t0 = Instant::now();
+        let h = self.scene.world.settings().timestep;
+        for (i, &r) in self.rates.iter().enumerate() {
+            if r != 0.0 {
+                let v = self.scene.controls.actuators()[i].value() + r * h;
+                let _ = self.scene.controls.set_index(i, v);
+            }
+        }
+        let r = if self.manual { self.scene.step_manual() } else { self.scene.step() };
+        self.step_wall_us = t0.elapsed().as_secs_f64() * 1e6;
+        match r {
+            Ok(()) => {
+                self.sequence += 1;
+                true
+            }
+            Err(e) => {
+                warn!("step failed, world paused at its last good state: {e}");
+                self.failure = Some(e.to_string());
+                self.paused = true;
+                false
+            }
+        }
+    }
+
+    /// Encodes the pose and stats frames of the current state (wall clock `wall_ns`).
+    pub fn encode_frames(&mut self, wall_ns: u64) {
+        let w = &self.scene.world;
+        match msgs::PoseFrameWriter::begin(&mut self.pose_buf, self.sequence, w.time(), wall_ns) {
+            Ok(mut fw) => {
+                for (i, b) in w.bodies().iter().enumerate() {
+                    let (x, q, v, om) = (b.position(), b.orientation(), b.linvel(), b.angvel());
+                    let flags = match b.kind() {
+                        BodyKind::Dynamic => 0,
+                        BodyKind::Kinematic => msgs::BODY_KINEMATIC,
+                        BodyKind::Static => msgs::BODY_STATIC,
+                    };
+                    let pose = msgs::BodyPose {
+                        id: i as u32,
+                        flags,
+                        position: [x.x, x.y, x.z],
+                        orientation: [q.i, q.j, q.k, q.w],
+                        linear_velocity: [v.x, v.y, v.z],
+                        angular_velocity: [om.x, om.y, om.z],
+                    };
+                    if let Err(e) = fw.push(&pose) {
+                        warn!("pose of body {i} not encodable: {e}");
+                    }
+                }
+            }
+            Err(e) => warn!("pose frame not encodable: {e}"),
+        }
+        let st = &mut self.stats;
+        st.sequence = self.sequence;
+        st.sim_time = w.time();
+        st.step_wall_us = self.step_wall_us;
+        st.overruns = self.overruns;
+        st.inputs = self.health;
+        st.islands.clear();
+        for s in w.island_stats() {
+            st.islands.push(msgs::IslandStats {
+                variant: msgs::SolverVariant::from_name(s.variant.name()).unwrap_or_default(),
+                status: msgs::SolveStatus::from_name(s.status.name()).unwrap_or(msgs::SolveStatus::Inexact),
+                fallback: false,
+                rows: s.rows as u32,
+                bodies: s.bodies as u32,
+                pivot_steps: s.pivot_steps as u32,
+                tight: s.tight as u32,
+                iterations: s.iterations as u32,
+                solve_us: s.solve_us,
+                residual_rel: if s.residual_rel.is_finite() { s.residual_rel } else { f64::MAX },
+            });
+        }
+        st.totals = msgs::StepTotals::from_islands(&st.islands);
+        if let Err(e) = st.encode(&mut self.stats_buf) {
+            warn!("stats frame not encodable: {e}");
+        }
+    }
+}
+
+/// Nanoseconds since the UNIX epoch.
+pub fn wall_ns() -> u64 {
+    std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).map_or(0, |d| d.as_nanos() as u64)
+}

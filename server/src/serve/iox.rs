@@ -1,0 +1,162 @@
+//! iceoryx2 transport for same-host subscribers: the same frames as on Zenoh, zero-copy through
+//! shared memory. Services (payload `[u8]`, one frame per sample):
+//!
+//! | service | direction | frames |
+//! |---|---|---|
+//! | `pivotsim/<world>/poses` | out | pose frames |
+//! | `pivotsim/<world>/stats` | out | stats frames |
+//! | `pivotsim/<world>/cmd` | in | any input frame (its kind decides) |
+//!
+//! The server's publishers discard a sample for a subscriber whose buffer is full (a stalled
+//! subscriber loses frames, the loop never waits); safe overflow keeps the newest frames. On
+//! start, the resources of dead nodes (a server or client killed with SIGKILL) are removed; on
+//! drop (Ctrl-C, end of run) the node releases everything it created. Subscribers and input
+//! publishers open the services with default settings (`open_or_create`).
+
+use iceoryx2::port::publisher::Publisher;
+use iceoryx2::port::subscriber::Subscriber;
+use iceoryx2::prelude::*;
+use pivotsim_msgs as msgs;
+use tracing::{info, warn};
+
+use super::{ErrorThrottle, Inbound, InboxSender, ServeError, Transport};
+
+/// Bytes a published frame may take before the publisher reallocates (a pose frame of 500 bodies).
+pub const INITIAL_FRAME_BYTES: usize = 64 * 1024;
+/// Samples a subscriber of the server's services buffers.
+pub const SUBSCRIBER_BUFFER: usize = 16;
+/// Inputs drained per loop iteration.
+const MAX_INPUTS_PER_POLL: usize = 256;
+
+fn err(e: impl std::fmt::Debug) -> ServeError {
+    ServeError::Transport { transport: "iceoryx2", message: format!("{e:?}") }
+}
+
+/// The iceoryx2 service name of a world's topic (`cmd` for every input).
+pub fn service_name(world: &msgs::WorldName, what: &str) -> String {
+    format!("{}/{}/{}", msgs::KEY_PREFIX, world.as_str(), what)
+}
+
+/// Removes the shared-memory resources of dead nodes; returns how many nodes were cleaned.
+pub fn clean_dead_nodes() -> usize {
+    let mut cleaned = 0;
+    let r = Node::<ipc::Service>::list(Config::global_config(), |state| {
+        if let NodeState::<ipc::Service>::Dead(view) = state {
+            match view.try_remove_stale_resources() {
+                Ok(_) => cleaned += 1,
+                Err(e) => warn!("iceoryx2: cannot clean a dead node's resources: {e:?}"),
+            }
+        }
+        CallbackProgression::Continue
+    });
+    if let Err(e) = r {
+        warn!("iceoryx2: cannot list nodes: {e:?}");
+    }
+    cleaned
+}
+
+type Service = iceoryx2::service::port_factory::publish_subscribe::PortFactory<ipc::Service, [u8], ()>;
+
+/// The server's iceoryx2 side.
+pub struct IoxTransport {
+    poses: Publisher<ipc::Service, [u8], ()>,
+    stats: Publisher<ipc::Service, [u8], ()>,
+    inputs: Subscriber<ipc::Service, [u8], ()>,
+    poses_service: Service,
+    _stats_service: Service,
+    _cmd_service: Service,
+    throttle: ErrorThrottle,
+    // Declared last: dropped after the ports and services.
+    _node: Node<ipc::Service>,
+}
+
+impl std::fmt::Debug for IoxTransport {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str("IoxTransport")
+    }
+}
+
+fn open_service(node: &Node<ipc::Service>, name: &str) -> Result<Service, ServeError> {
+    let name: ServiceName = name.try_into().map_err(err)?;
+    node.service_builder(&name)
+        .publish_subscribe::<[u8]>()
+        .enable_safe_overflow(true)
+        .subscriber_max_buffer_size(SUBSCRIBER_BUFFER)
+        .open_or_create()
+        .map_err(err)
+}
+
+impl IoxTransport {
+    /// Cleans up after dead nodes, then creates the node, services and ports of `world`.
+    pub fn open(world: &msgs::WorldName) -> Result<IoxTransport, ServeError> {
+        let cleaned = clean_dead_nodes();
+        if cleaned > 0 {
+            info!("iceoryx2: removed the resources of {cleaned} dead node(s)");
+        }
+        let node = NodeBuilder::new()
+            .name(&"pivotsim-server".try_into().map_err(err)?)
+            .signal_handling_mode(SignalHandlingMode::Disabled)
+            .create::<ipc::Service>()
+            .map_err(err)?;
+        let poses_service = open_service(&node, &service_name(world, "poses"))?;
+        let stats_service = open_service(&node, &service_name(world, "stats"))?;
+        let cmd_service = open_service(&node, &service_name(world, "cmd"))?;
+        let publisher = |s: &Service| {
+            s.publisher_builder()
+                .initial_max_slice_len(INITIAL_FRAME_BYTES)
+                .allocation_strategy(AllocationStrategy::PowerOfTwo)
+                .backpressure_strategy(BackpressureStrategy::DiscardData)
+                .create()
+                .map_err(err)
+        };
+        let poses = publisher(&poses_service)?;
+        let stats = publisher(&stats_service)?;
+        let inputs = cmd_service.subscriber_builder().create().map_err(err)?;
+        Ok(IoxTransport {
+            poses,
+            stats,
+            inputs,
+            poses_service,
+            _stats_service: stats_service,
+            _cmd_service: cmd_service,
+            throttle: ErrorThrottle::default(),
+            _node: node,
+        })
+    }
+
+    fn send(p: &Publisher<ipc::Service, [u8], ()>, bytes: &[u8]) -> Result<(), String> {
+        let sample = p.loan_slice_uninit(bytes.len()).map_err(|e| format!("{e:?}"))?;
+        let sample = sample.write_from_slice(bytes);
+        sample.send().map(|_| ()).map_err(|e| format!("{e:?}"))
+    }
+}
+
+impl Transport for IoxTransport {
+    fn publish(&mut self, poses: &[u8], stats: &[u8]) {
+        if let Err(e) = Self::send(&self.poses, poses) {
+            self.throttle.fail("iceoryx2 poses", &e);
+        }
+        if let Err(e) = Self::send(&self.stats, stats) {
+            self.throttle.fail("iceoryx2 stats", &e);
+        }
+    }
+
+    fn poll(&mut self, inbox: &InboxSender) {
+        for _ in 0..MAX_INPUTS_PER_POLL {
+            match self.inputs.receive() {
+                Ok(Some(sample)) => {
+                    inbox.offer(Inbound::Input { topic: None, bytes: sample.payload().to_vec() });
+                }
+                Ok(None) => break,
+                Err(e) => {
+                    self.throttle.fail("iceoryx2 inputs", &format!("{e:?}"));
+                    break;
+                }
+            }
+        }
+    }
+
+    fn status(&mut self) -> String {
+        format!("iceoryx2: {} subscriber(s)", self.poses_service.dynamic_config().number_of_subscribers())
+    }
+}
