@@ -1,0 +1,360 @@
+//! The server's engine in-process, without transports: inputs move the right joints in wire
+//! units; NaN, truncated, oversized, wrong-version, unknown-actuator and stale inputs are
+//! rejected, counted by reason, and leave the world bit-identical to a run without them; the
+//! deadman neutralizes within its timeout plus one step; control requests pause, step, reset,
+//! switch the solver variant live without a discontinuity, load scenes, and fail with typed
+//! errors; every built-in scene's description passes the wire validation.
+
+use std::time::{Duration, Instant};
+
+use pivotsim_msgs as msgs;
+use pivotsim_server::serve::Engine;
+
+const DEADMAN: Duration = Duration::from_millis(250);
+
+/// A drum on a hinge (a winch: 2 rad/s per unit) and a slider on a prismatic joint under a
+/// position actuator (the boom), no contacts.
+const RIG: &str = r#"
+[scene]
+name = "rig"
+[[body]]
+name = "drum"
+mass = 10
+inertia = [1, 1, 1]
+position = [0, 0, 1]
+[[joint]]
+name = "axle"
+type = "hinge"
+a = "drum"
+anchor = [0, 0, 1]
+axis = [0, 1, 0]
+[[body]]
+name = "slider"
+mass = 5
+inertia = [1, 1, 1]
+position = [3, 0, 1]
+[[joint]]
+name = "rail"
+type = "prismatic"
+a = "slider"
+anchor = [3, 0, 1]
+axis = [0, 0, 1]
+[[actuator]]
+name = "winch"
+type = "velocity"
+joints = ["axle"]
+scale = [2.0]
+max_force = 1e6
+winch = true
+[[actuator]]
+name = "boom"
+type = "position"
+joints = ["rail"]
+max_speed = 10
+max_force = 1e6
+[[joystick.axis]]
+index = 0
+actuator = "winch"
+"#;
+
+fn rig_path() -> String {
+    let dir = std::env::temp_dir().join(format!("pivotsim-serve-engine-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let p = dir.join("rig.toml");
+    std::fs::write(&p, RIG).unwrap();
+    p.display().to_string()
+}
+
+fn engine(scene: &str) -> Engine {
+    Engine::new(scene, msgs::WorldName::new("test").unwrap(), DEADMAN).unwrap()
+}
+
+fn name(s: &str) -> msgs::ActuatorName {
+    msgs::ActuatorName::new(s).unwrap()
+}
+
+fn frame(cmd: msgs::InputCommand) -> Vec<u8> {
+    let mut buf = Vec::new();
+    cmd.encode(&mut buf).unwrap();
+    buf
+}
+
+fn winch(seq: u64, speed: f64) -> Vec<u8> {
+    frame(msgs::InputCommand::Winch(msgs::WinchCommand {
+        sequence: seq,
+        source_id: 7,
+        actuator: name("winch"),
+        drum_speed: speed,
+    }))
+}
+
+fn joint_speed(e: &Engine, joint: &str) -> f64 {
+    let w = &e.scene().world;
+    w.joint_speed(w.joint_id(joint).unwrap()).unwrap()
+}
+
+fn joint_coordinate(e: &Engine, joint: &str) -> f64 {
+    let w = &e.scene().world;
+    w.joint_coordinate(w.joint_id(joint).unwrap()).unwrap()
+}
+
+/// Every body's state, bitwise.
+fn state_bits(e: &Engine) -> Vec<u64> {
+    e.scene()
+        .world
+        .bodies()
+        .iter()
+        .flat_map(|b| {
+            let q = b.orientation();
+            [b.position().as_slice(), b.linvel().as_slice(), b.angvel().as_slice(), q.coords.as_slice()]
+                .concat()
+                .into_iter()
+                .map(f64::to_bits)
+                .collect::<Vec<_>>()
+        })
+        .collect()
+}
+
+#[test]
+fn winch_boom_and_actuator_commands_move_the_right_joints_in_wire_units() {
+    let mut e = engine(&rig_path());
+    let t0 = Instant::now();
+    e.handle_input(Some(msgs::Topic::Winch), &winch(1, 1.5), t0).unwrap();
+    assert!(e.tick(t0));
+    assert!((joint_speed(&e, "axle") - 1.5).abs() < 1e-6, "drum at the commanded 1.5 rad/s");
+    assert!(joint_speed(&e, "rail").abs() < 1e-6, "the slider did not move");
+    // A boom command is a velocity target: the position actuator's target moves at 0.6 m/s.
+    let boom = frame(msgs::InputCommand::Boom(msgs::BoomCommand {
+        sequence: 2,
+        source_id: 7,
+        targets: vec![msgs::BoomTarget { actuator: name("boom"), value: 0.6 }],
+    }));
+    e.handle_input(Some(msgs::Topic::Boom), &boom, t0).unwrap();
+    let h = e.scene().world.settings().timestep;
+    for _ in 0..30 {
+        e.tick(t0);
+    }
+    let s = joint_coordinate(&e, "rail");
+    assert!((s - 0.6 * 30.0 * h).abs() < 1e-6, "slider at {s}");
+    // An actuator command in position mode sets the target.
+    let pos = frame(msgs::InputCommand::Actuator(msgs::ActuatorCommand {
+        sequence: 3,
+        source_id: 7,
+        mode: msgs::ActuatorMode::Position,
+        actuator: name("boom"),
+        value: -0.25,
+    }));
+    e.handle_input(Some(msgs::Topic::Actuator), &pos, t0).unwrap();
+    // At most 10 m/s (max_speed): 0.55 m takes 4 steps.
+    for _ in 0..5 {
+        e.tick(t0);
+    }
+    assert!((joint_coordinate(&e, "rail") + 0.25).abs() < 1e-6);
+    // A joystick goes through the scene's mapping: axis 0 → winch (±1 → ±2 rad/s).
+    let joy = frame(msgs::InputCommand::Joystick(msgs::Joystick::new(4, 7, &[-0.5], 0, 0).unwrap()));
+    e.handle_input(Some(msgs::Topic::Joystick), &joy, t0).unwrap();
+    e.tick(t0);
+    assert!((joint_speed(&e, "axle") + 1.0).abs() < 1e-6);
+    assert_eq!(e.health().accepted, 4);
+    assert_eq!(e.health().rejected_total(), 0);
+}
+
+#[test]
+fn bad_inputs_are_rejected_counted_by_reason_and_change_nothing() {
+    let path = rig_path();
+    let (mut clean, mut dirty) = (engine(&path), engine(&path));
+    let t0 = Instant::now();
+    let good = winch(10, 1.0);
+    for e in [&mut clean, &mut dirty] {
+        e.handle_input(Some(msgs::Topic::Winch), &good, t0).unwrap();
+    }
+    // NaN: the encoder refuses it, so patch the speed's bytes in a valid frame.
+    let mut nan = winch(11, 1.25);
+    let at = nan.windows(8).position(|w| w == 1.25f64.to_le_bytes()).unwrap();
+    nan[at..at + 8].copy_from_slice(&f64::NAN.to_le_bytes());
+    let truncated = winch(12, 0.5)[..40].to_vec();
+    // Oversized: a header that claims a payload far beyond a winch command's.
+    let mut oversized = winch(13, 0.5);
+    oversized[8..12].copy_from_slice(&100_000u32.to_le_bytes());
+    oversized.resize(16 + 100_000, 0);
+    let mut version = winch(14, 0.5);
+    version[4..6].copy_from_slice(&99u16.to_le_bytes());
+    let unknown = frame(msgs::InputCommand::Winch(msgs::WinchCommand {
+        sequence: 15,
+        source_id: 7,
+        actuator: name("crane"),
+        drum_speed: 0.5,
+    }));
+    // The boom is a position actuator, not a winch.
+    let wrong_kind = frame(msgs::InputCommand::Winch(msgs::WinchCommand {
+        sequence: 16,
+        source_id: 7,
+        actuator: name("boom"),
+        drum_speed: 0.5,
+    }));
+    let stale = winch(10, -1.0);
+    // A winch frame on the joystick key.
+    let wrong_key = winch(17, -1.0);
+    let cases: [(&[u8], Option<msgs::Topic>, msgs::RejectReason); 8] = [
+        (&nan, Some(msgs::Topic::Winch), msgs::RejectReason::NonFinite),
+        (&truncated, Some(msgs::Topic::Winch), msgs::RejectReason::Malformed),
+        (&oversized, Some(msgs::Topic::Winch), msgs::RejectReason::Oversize),
+        (&version, Some(msgs::Topic::Winch), msgs::RejectReason::Version),
+        (&unknown, Some(msgs::Topic::Winch), msgs::RejectReason::UnknownActuator),
+        (&wrong_kind, Some(msgs::Topic::Winch), msgs::RejectReason::UnknownActuator),
+        (&stale, Some(msgs::Topic::Winch), msgs::RejectReason::Stale),
+        (&wrong_key, Some(msgs::Topic::Joystick), msgs::RejectReason::Version),
+    ];
+    for step in 0..120 {
+        if step % 10 == 0 {
+            for (bytes, topic, reason) in &cases {
+                assert_eq!(dirty.handle_input(*topic, bytes, t0), Err(*reason));
+            }
+        }
+        clean.tick(t0);
+        dirty.tick(t0);
+        assert_eq!(state_bits(&clean), state_bits(&dirty), "step {step}");
+    }
+    let h = dirty.health();
+    assert_eq!(h.accepted, 1);
+    for (reason, n) in [
+        (msgs::RejectReason::NonFinite, 12),
+        (msgs::RejectReason::Malformed, 12),
+        (msgs::RejectReason::Oversize, 12),
+        (msgs::RejectReason::Version, 24),
+        (msgs::RejectReason::UnknownActuator, 24),
+        (msgs::RejectReason::Stale, 12),
+    ] {
+        assert_eq!(h.rejected_for(reason), n, "{reason}");
+    }
+    // The stats frame carries the counters.
+    let stats = msgs::SolverStats::decode(dirty.stats_frame()).unwrap();
+    assert_eq!(stats.inputs, *h);
+    assert_eq!(stats.sequence, 120);
+}
+
+#[test]
+fn the_deadman_neutralizes_after_its_timeout_and_the_next_input_clears_it() {
+    let mut e = engine(&rig_path());
+    let t0 = Instant::now();
+    e.handle_input(None, &winch(1, 2.0), t0).unwrap();
+    let h = Duration::from_secs_f64(e.scene().world.settings().timestep);
+    let mut t = t0;
+    let mut tripped_at = None;
+    for _ in 0..60 {
+        t += h;
+        e.tick(t);
+        if e.health().deadman_active && tripped_at.is_none() {
+            tripped_at = Some(t - t0);
+            // Neutral: the drum is held still within the step that follows.
+            e.tick(t + h);
+            assert!(joint_speed(&e, "axle").abs() < 1e-6);
+            break;
+        }
+        assert!((joint_speed(&e, "axle") - 2.0).abs() < 1e-6, "driven until the deadman");
+    }
+    let at = tripped_at.expect("the deadman tripped");
+    assert!(at > DEADMAN && at <= DEADMAN + h, "tripped after {at:?}");
+    assert_eq!(e.health().deadman_trips, 1);
+    let stats = msgs::SolverStats::decode(e.stats_frame()).unwrap();
+    assert!(stats.inputs.deadman_active);
+    e.handle_input(None, &winch(2, 1.0), t + h).unwrap();
+    assert!(!e.health().deadman_active);
+    e.tick(t + 2 * h);
+    assert!((joint_speed(&e, "axle") - 1.0).abs() < 1e-6);
+}
+
+fn control(e: &mut Engine, id: u64, command: msgs::ControlCommand) -> msgs::ControlOutcome {
+    let mut buf = Vec::new();
+    msgs::ControlRequest { id, command }.encode(&mut buf).unwrap();
+    let reply = msgs::ControlReply::decode(&e.handle_control(&buf)).unwrap();
+    assert_eq!(reply.id, id);
+    reply.outcome
+}
+
+#[test]
+fn control_requests_pause_step_reset_load_and_fail_with_typed_errors() {
+    use msgs::ControlCommand as C;
+    use msgs::ControlOutcome as O;
+    let mut e = engine("pendulum");
+    let t0 = Instant::now();
+    for _ in 0..10 {
+        e.tick(t0);
+    }
+    match control(&mut e, 1, C::Step { count: 3 }) {
+        O::Error(f) => assert_eq!(f.code, msgs::ControlErrorCode::Busy),
+        o => panic!("{o:?}"),
+    }
+    let O::Ok(s) = control(&mut e, 2, C::Pause) else { panic!() };
+    assert!(s.paused && s.sequence == 10);
+    assert!(!e.tick(t0), "paused: no step");
+    let O::Ok(s) = control(&mut e, 3, C::Step { count: 3 }) else { panic!() };
+    assert_eq!(s.sequence, 13);
+    assert_eq!(msgs::PoseFrameView::parse(e.pose_frame()).unwrap().sequence(), 13);
+    let O::Ok(s) = control(&mut e, 4, C::Reset) else { panic!() };
+    assert!(s.paused && s.sim_time == 0.0 && s.scene == "pendulum");
+    let O::Ok(s) = control(&mut e, 5, C::LoadScene { scene: "box_stack".into() }) else { panic!() };
+    assert_eq!(s.scene, "box_stack");
+    assert_eq!(msgs::SceneDescription::decode(e.description()).unwrap().scene, "box_stack");
+    match control(&mut e, 6, C::LoadScene { scene: "no-such-scene".into() }) {
+        O::Error(f) => assert_eq!(f.code, msgs::ControlErrorCode::UnknownScene),
+        o => panic!("{o:?}"),
+    }
+    let bad = std::env::temp_dir().join(format!("pivotsim-bad-{}.toml", std::process::id()));
+    std::fs::write(&bad, "[scene]\nname = 3\n").unwrap();
+    match control(&mut e, 7, C::LoadScene { scene: bad.display().to_string() }) {
+        O::Error(f) => {
+            assert_eq!(f.code, msgs::ControlErrorCode::SceneLoadFailed);
+            assert!(f.message.contains(":2:"), "located: {}", f.message);
+        }
+        o => panic!("{o:?}"),
+    }
+    assert_eq!(e.scene().name, "box_stack", "a failed load keeps the running scene");
+    let O::Ok(s) = control(&mut e, 8, C::Resume) else { panic!() };
+    assert!(!s.paused);
+    assert!(e.tick(t0));
+    // A frame that is no control request.
+    let reply = msgs::ControlReply::decode(&e.handle_control(b"garbage")).unwrap();
+    assert!(matches!(reply.outcome, O::Error(f) if f.code == msgs::ControlErrorCode::InvalidRequest));
+}
+
+/// Both variants are exact: switching from `skyline` to `full` mid-run keeps the trajectory of a
+/// pure `skyline` run (a discontinuity would show as a jump far above round-off).
+#[test]
+fn switching_the_solver_variant_live_keeps_the_simulation_continuous() {
+    let (mut a, mut b) = (engine("box_stack"), engine("box_stack"));
+    let t0 = Instant::now();
+    let mut max_diff: f64 = 0.0;
+    for step in 0..240 {
+        if step == 120 {
+            let out = control(&mut b, 1, msgs::ControlCommand::SetVariant { variant: msgs::SolverVariant::Full });
+            assert!(matches!(out, msgs::ControlOutcome::Ok(ref s) if s.variant == msgs::SolverVariant::Full));
+        }
+        a.tick(t0);
+        b.tick(t0);
+        for (p, q) in a.scene().world.bodies().iter().zip(b.scene().world.bodies()) {
+            max_diff = max_diff.max((p.position() - q.position()).norm());
+        }
+    }
+    assert_eq!(b.scene().world.island_stats()[0].variant.name(), "full");
+    assert!(max_diff < 1e-9, "trajectories differ by {max_diff}");
+}
+
+#[test]
+fn every_builtin_scene_has_a_valid_description_and_pose_frame() {
+    for s in pivotsim_server::scene::BUILTIN {
+        let mut e = engine(s.name);
+        let d = msgs::SceneDescription::decode(e.description())
+            .unwrap_or_else(|err| panic!("{}: {err}", s.name));
+        d.validate().unwrap();
+        assert_eq!(d.bodies.len(), e.scene().world.bodies().len());
+        assert_eq!(d.actuators.len(), e.scene().controls.actuators().len());
+        e.tick(Instant::now());
+        let f = msgs::PoseFrame::decode(e.pose_frame()).unwrap();
+        assert_eq!(f.bodies.len(), d.bodies.len());
+        assert_eq!(f.sequence, 1);
+        for (p, b) in f.bodies.iter().zip(e.scene().world.bodies()) {
+            assert_eq!(p.position, [b.position().x, b.position().y, b.position().z]);
+        }
+    }
+}
