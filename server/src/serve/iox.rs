@@ -78,17 +78,27 @@ impl std::fmt::Debug for IoxTransport {
 
 fn open_service(node: &Node<ipc::Service>, name: &str) -> Result<Service, ServeError> {
     let name: ServiceName = name.try_into().map_err(err)?;
-    node.service_builder(&name)
+    let created = node
+        .service_builder(&name)
         .publish_subscribe::<[u8]>()
         .enable_safe_overflow(true)
         .subscriber_max_buffer_size(SUBSCRIBER_BUFFER)
-        .open_or_create()
-        .map_err(err)
+        .open_or_create();
+    match created {
+        Ok(s) => Ok(s),
+        // A client created the service first with other settings: use it as it is.
+        Err(e) => {
+            warn!("iceoryx2: {name}: {e:?}; opening the existing service with its own settings");
+            node.service_builder(&name).publish_subscribe::<[u8]>().open().map_err(err)
+        }
+    }
 }
 
 impl IoxTransport {
     /// Cleans up after dead nodes, then creates the node, services and ports of `world`.
     pub fn open(world: &msgs::WorldName) -> Result<IoxTransport, ServeError> {
+        // iceoryx2 logs to stderr on its own; keep it to errors unless IOX2_LOG_LEVEL says otherwise.
+        set_log_level_from_env_or(LogLevel::Error);
         let cleaned = clean_dead_nodes();
         if cleaned > 0 {
             info!("iceoryx2: removed the resources of {cleaned} dead node(s)");

@@ -231,6 +231,13 @@ pub fn run(config: &ServeConfig, shutdown: Arc<AtomicBool>) -> Result<ServeRepor
     }
     let (tx, rx, dropped) = inbox();
     let mut transports: Vec<Box<dyn Transport>> = Vec::new();
+    // iceoryx2 first: once Zenoh answers, every service exists.
+    if config.iceoryx2 {
+        #[cfg(feature = "iceoryx2")]
+        transports.push(Box::new(iox::IoxTransport::open(&world)?));
+        #[cfg(not(feature = "iceoryx2"))]
+        return Err(ServeError::NotCompiled("iceoryx2"));
+    }
     if let Some(z) = &config.zenoh {
         #[cfg(feature = "zenoh")]
         transports.push(Box::new(zenoh_io::ZenohTransport::open(
@@ -244,12 +251,6 @@ pub fn run(config: &ServeConfig, shutdown: Arc<AtomicBool>) -> Result<ServeRepor
             let _ = z;
             return Err(ServeError::NotCompiled("zenoh"));
         }
-    }
-    if config.iceoryx2 {
-        #[cfg(feature = "iceoryx2")]
-        transports.push(Box::new(iox::IoxTransport::open(&world)?));
-        #[cfg(not(feature = "iceoryx2"))]
-        return Err(ServeError::NotCompiled("iceoryx2"));
     }
     info!(
         "serving scene `{}` as world `{}` (h = {:.4} s, {}), {} transport(s)",
