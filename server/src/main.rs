@@ -13,10 +13,13 @@ use pivotsim_server::solver::{OrderingKind, Solver, SolverOptions, Variant, io};
 
 /// Exact-contact multibody physics server (block principal pivoting with Cholesky downdates).
 #[derive(Debug, Parser)]
-#[command(version, about)]
+#[command(version, about, args_conflicts_with_subcommands = true)]
 struct Cli {
     #[command(subcommand)]
     command: Option<Command>,
+    /// Without a subcommand: `serve` with these options.
+    #[command(flatten)]
+    serve: ServeArgs,
 }
 
 #[derive(Debug, Subcommand)]
@@ -152,13 +155,6 @@ struct ServeArgs {
     paused: bool,
 }
 
-/// `serve`'s options alone (the command when no subcommand is given).
-#[derive(Debug, Parser)]
-struct ServeOnly {
-    #[command(flatten)]
-    args: ServeArgs,
-}
-
 /// The scene `serve` runs when none is given.
 const DEFAULT_SCENE: &str = "pendulum";
 
@@ -243,7 +239,7 @@ fn main() -> ExitCode {
             pivotsim_server::bench::run(&cfg).map(|_| ())
         }
         Some(Command::Serve(args)) => serve(args),
-        None => serve(ServeOnly::parse_from(["pivotsim-server"]).args),
+        None => serve(cli.serve),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

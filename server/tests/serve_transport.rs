@@ -385,3 +385,15 @@ fn a_server_killed_with_sigkill_restarts_cleanly() {
     assert!(alive, "the second server is running");
     assert!(seq.is_some(), "the restarted server publishes on the same world");
 }
+
+/// The README's main command: no subcommand serves the default scene.
+#[test]
+fn the_default_command_serves_the_default_scene() {
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_pivotsim-server"))
+        .args(["--steps", "30", "--fast", "--no-iceoryx2", "--listen", &free_endpoint()])
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(text.starts_with("30 steps"), "{text}");
+}
