@@ -327,7 +327,8 @@ fn switching_the_solver_variant_live_keeps_the_simulation_continuous() {
     let mut max_diff: f64 = 0.0;
     for step in 0..240 {
         if step == 120 {
-            let out = control(&mut b, 1, msgs::ControlCommand::SetVariant { variant: msgs::SolverVariant::Full });
+            let out =
+                control(&mut b, 1, msgs::ControlCommand::SetVariant { variant: msgs::SolverVariant::Full });
             assert!(matches!(out, msgs::ControlOutcome::Ok(ref s) if s.variant == msgs::SolverVariant::Full));
         }
         a.tick(t0);
@@ -344,8 +345,8 @@ fn switching_the_solver_variant_live_keeps_the_simulation_continuous() {
 fn every_builtin_scene_has_a_valid_description_and_pose_frame() {
     for s in pivotsim_server::scene::BUILTIN {
         let mut e = engine(s.name);
-        let d = msgs::SceneDescription::decode(e.description())
-            .unwrap_or_else(|err| panic!("{}: {err}", s.name));
+        let d =
+            msgs::SceneDescription::decode(e.description()).unwrap_or_else(|err| panic!("{}: {err}", s.name));
         d.validate().unwrap();
         assert_eq!(d.bodies.len(), e.scene().world.bodies().len());
         assert_eq!(d.actuators.len(), e.scene().controls.actuators().len());
