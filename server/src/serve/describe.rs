@@ -1,4 +1,4 @@
-//! The scene description a renderer or console needs ([`SceneDescription`] of `pivotsim-msgs`),
+//! The scene description a renderer or console needs ([`SceneDescription`](pivotsim_msgs::SceneDescription) of `pivotsim-msgs`),
 //! built from a loaded scene: bodies with their shapes, the joint tree, the actuators in wire
 //! units and the default joystick bindings.
 //!
