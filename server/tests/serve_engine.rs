@@ -14,48 +14,7 @@ const DEADMAN: Duration = Duration::from_millis(250);
 
 /// A drum on a hinge (a winch: 2 rad/s per unit) and a slider on a prismatic joint under a
 /// position actuator (the boom), no contacts.
-const RIG: &str = r#"
-[scene]
-name = "rig"
-[[body]]
-name = "drum"
-mass = 10
-inertia = [1, 1, 1]
-position = [0, 0, 1]
-[[joint]]
-name = "axle"
-type = "hinge"
-a = "drum"
-anchor = [0, 0, 1]
-axis = [0, 1, 0]
-[[body]]
-name = "slider"
-mass = 5
-inertia = [1, 1, 1]
-position = [3, 0, 1]
-[[joint]]
-name = "rail"
-type = "prismatic"
-a = "slider"
-anchor = [3, 0, 1]
-axis = [0, 0, 1]
-[[actuator]]
-name = "winch"
-type = "velocity"
-joints = ["axle"]
-scale = [2.0]
-max_force = 1e6
-winch = true
-[[actuator]]
-name = "boom"
-type = "position"
-joints = ["rail"]
-max_speed = 10
-max_force = 1e6
-[[joystick.axis]]
-index = 0
-actuator = "winch"
-"#;
+const RIG: &str = include_str!("support/rig.toml");
 
 fn rig_path() -> String {
     let dir = std::env::temp_dir().join(format!("pivotsim-serve-engine-{}", std::process::id()));

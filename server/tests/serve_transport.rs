@@ -19,28 +19,8 @@ use pivotsim_msgs as msgs;
 use pivotsim_server::serve::{ServeConfig, ServeReport, ZenohOptions, run};
 use zenoh::Wait;
 
-const RIG: &str = r#"
-[scene]
-name = "rig"
-[[body]]
-name = "drum"
-mass = 10
-inertia = [1, 1, 1]
-position = [0, 0, 1]
-[[joint]]
-name = "axle"
-type = "hinge"
-a = "drum"
-anchor = [0, 0, 1]
-axis = [0, 1, 0]
-[[actuator]]
-name = "winch"
-type = "velocity"
-joints = ["axle"]
-scale = [2.0]
-max_force = 1e6
-winch = true
-"#;
+/// The drum-and-slider rig of the engine tests.
+const RIG: &str = include_str!("support/rig.toml");
 
 fn free_endpoint() -> String {
     let l = TcpListener::bind("127.0.0.1:0").unwrap();

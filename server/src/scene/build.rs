@@ -263,24 +263,8 @@ impl Builder<'_> {
                 ));
             }
         };
-        let present = [
-            ("size", s.size.is_some()),
-            ("radius", s.radius.is_some()),
-            ("length", s.length.is_some()),
-            ("normal", s.normal.is_some()),
-            ("points", s.points.is_some()),
-            ("heights", s.heights.is_some()),
-            ("steps", s.steps.is_some()),
-            ("rise", s.rise.is_some()),
-            ("run", s.run.is_some()),
-            ("amplitude", s.amplitude.is_some()),
-            ("wavelength", s.wavelength.is_some()),
-            ("cells", s.cells.is_some()),
-            ("vertices", s.vertices.is_some()),
-            ("triangles", s.triangles.is_some()),
-        ];
         let terrain = super::terrain::is_terrain(&s.kind);
-        if let Some((f, _)) = present.iter().find(|(f, p)| !terrain && *p && !allowed.contains(f)) {
+        if let Some(f) = s.stray_field(allowed).filter(|_| !terrain) {
             return Err(self.invalid(span, f, format!("`{f}` does not apply to a {}", s.kind)));
         }
         let shape = match s.kind.as_str() {

@@ -112,6 +112,31 @@ pub(crate) struct ShapeDef {
     pub triangles: Option<Vec<[u32; 3]>>,
 }
 
+impl ShapeDef {
+    /// The first type-specific field that is set but not in `allowed`.
+    pub fn stray_field(&self, allowed: &[&str]) -> Option<&'static str> {
+        [
+            ("size", self.size.is_some()),
+            ("radius", self.radius.is_some()),
+            ("length", self.length.is_some()),
+            ("normal", self.normal.is_some()),
+            ("points", self.points.is_some()),
+            ("heights", self.heights.is_some()),
+            ("steps", self.steps.is_some()),
+            ("rise", self.rise.is_some()),
+            ("run", self.run.is_some()),
+            ("amplitude", self.amplitude.is_some()),
+            ("wavelength", self.wavelength.is_some()),
+            ("cells", self.cells.is_some()),
+            ("vertices", self.vertices.is_some()),
+            ("triangles", self.triangles.is_some()),
+        ]
+        .into_iter()
+        .find(|(f, set)| *set && !allowed.contains(f))
+        .map(|(f, _)| f)
+    }
+}
+
 /// `[[joint]]` (also inside `[[repeat]]`).
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]

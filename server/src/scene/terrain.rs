@@ -34,23 +34,7 @@ fn allowed(kind: &str) -> &'static [&'static str] {
 }
 
 pub(crate) fn shape(b: &Builder, span: &Range<usize>, kind: &str, s: &ShapeDef) -> R<Shape> {
-    let present = [
-        ("size", s.size.is_some()),
-        ("radius", s.radius.is_some()),
-        ("length", s.length.is_some()),
-        ("normal", s.normal.is_some()),
-        ("points", s.points.is_some()),
-        ("heights", s.heights.is_some()),
-        ("steps", s.steps.is_some()),
-        ("rise", s.rise.is_some()),
-        ("run", s.run.is_some()),
-        ("amplitude", s.amplitude.is_some()),
-        ("wavelength", s.wavelength.is_some()),
-        ("cells", s.cells.is_some()),
-        ("vertices", s.vertices.is_some()),
-        ("triangles", s.triangles.is_some()),
-    ];
-    if let Some((f, _)) = present.iter().find(|(f, p)| *p && !allowed(kind).contains(f)) {
+    if let Some(f) = s.stray_field(allowed(kind)) {
         return Err(b.invalid(span, f, format!("`{f}` does not apply to a {kind}")));
     }
     let need = |v: Option<f64>, field: &str| {
