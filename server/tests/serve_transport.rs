@@ -360,9 +360,25 @@ fn a_server_killed_with_sigkill_restarts_cleanly() {
     let mut b = spawn();
     let seq = first_frame(Duration::from_secs(10));
     let alive = b.try_wait().unwrap().is_none();
-    b.kill().unwrap();
-    b.wait().unwrap();
+    // SIGTERM: a clean shutdown that releases the shared memory (Ctrl-C does the same).
+    let term = std::process::Command::new("kill").args(["-TERM", &b.id().to_string()]).status();
+    let deadline = Instant::now() + Duration::from_secs(10);
+    let mut clean_exit = false;
+    while Instant::now() < deadline {
+        if let Some(st) = b.try_wait().unwrap() {
+            clean_exit = st.success();
+            break;
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    if b.try_wait().unwrap().is_none() {
+        b.kill().unwrap();
+        b.wait().unwrap();
+    }
     assert!(alive, "the second server is running");
+    if term.is_ok_and(|s| s.success()) {
+        assert!(clean_exit, "SIGTERM stops the server cleanly");
+    }
     assert!(seq.is_some(), "the restarted server publishes on the same world");
 }
 
