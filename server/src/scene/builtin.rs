@@ -27,6 +27,7 @@ pub const BUILTIN: &[BuiltinScene] = &[
     scene!("pendulum", "a double pendulum on hinges: the smallest scene with joints"),
     scene!("box_stack", "ten boxes stacked on the ground, mass ratio 100 between neighbours"),
     scene!("hanging_chain", "a chain of 20 capsules on ball joints, released sideways"),
+    scene!("forwarder", "a 16-link 1,900 kg forwarder crane grasps a 400 kg log, lifts it and slews"),
     scene!("winch", "a 400 kg drum winds a chain of 50 × 1 kg capsules dragged along the ground"),
 ];
 
