@@ -8,7 +8,8 @@
 //! - *mass ratio* of an island: largest over smallest body mass among its dynamic bodies (paper
 //!   Table 2); the summary reports the largest over the run;
 //! - *tight fraction*: tight rows over rows of an island (the share of variables at a bound);
-//! - *joint error*: [`World::max_anchor_error`] after the step, the largest over the run;
+//! - *joint error*: [`World::max_joint_error`] after the step (anchor separation across locked
+//!   directions), the largest over the run;
 //! - *finite*: no step ever failed on a NaN/Inf state or problem (the run stops at the first).
 
 use std::fs::File;
@@ -84,6 +85,8 @@ pub struct RunSummary {
     pub mean_tight_fraction: f64,
     /// Largest joint anchor error after a step (m).
     pub max_joint_error_m: f64,
+    /// Largest speed of a dynamic body (m/s): an explosion shows here while everything is finite.
+    pub max_body_speed_mps: f64,
     /// Largest relative natural-map residual of an island solve.
     pub max_residual_rel: f64,
     /// Island solves by outcome: converged, inexact, max_steps, other.
@@ -245,6 +248,7 @@ pub fn run_scene_observed(
         max_tight_fraction: 0.0,
         mean_tight_fraction: 0.0,
         max_joint_error_m: 0.0,
+        max_body_speed_mps: 0.0,
         max_residual_rel: 0.0,
         solves_converged: 0,
         solves_inexact: 0,
@@ -391,7 +395,10 @@ fn record_step(world: &World, sum: &mut RunSummary, acc: &mut Acc) {
         acc.tight_largest += l.tight as f64 / l.rows as f64;
     }
     sum.max_islands = sum.max_islands.max(stats.len());
-    sum.max_joint_error_m = sum.max_joint_error_m.max(world.max_anchor_error());
+    sum.max_joint_error_m = sum.max_joint_error_m.max(world.max_joint_error());
+    for b in world.bodies().iter().filter(|b| b.is_dynamic()) {
+        sum.max_body_speed_mps = sum.max_body_speed_mps.max(b.linvel().norm());
+    }
     acc.solve_us.push(solve);
 }
 
@@ -403,7 +410,7 @@ pub fn summary_text(s: &RunSummary) -> String {
          solve per step: mean {:.1} µs, p99 {:.1} µs, max {:.1} µs; step mean {:.1} µs\n\
          pivots per solve: mean {:.2}, max {}; tight fraction max {:.3}, mean (largest island) {:.3}\n\
          solves: {} converged, {} inexact, {} at the step cap, {} other; max relative residual {:.2e}\n\
-         joint error max {:.3e} m; finite: {}{}{}",
+         joint error max {:.3e} m; body speed max {:.3} m/s; finite: {}{}{}",
         s.scene,
         s.variant,
         s.steps,
@@ -428,6 +435,7 @@ pub fn summary_text(s: &RunSummary) -> String {
         s.solves_other,
         s.max_residual_rel,
         s.max_joint_error_m,
+        s.max_body_speed_mps,
         s.finite,
         s.error.as_deref().map(|e| format!("\nstopped early: {e}")).unwrap_or_default(),
         if s.dumped > 0 { format!("\nMLCP files written: {}", s.dumped) } else { String::new() },

@@ -329,3 +329,19 @@ joint = \"latch\"
     assert!((b.position().z - z).abs() < 1e-6, "latched at {z}, now {}", b.position().z);
     assert!(b.linvel().norm() < 1e-6);
 }
+
+/// A prismatic joint's slide is its coordinate, not an error: `max_joint_error` leaves it out,
+/// `max_anchor_error` (documented as including it) does not.
+#[test]
+fn the_joint_error_excludes_a_prismatic_slide() {
+    let mut sc = load(include_str!("support/rig.toml"));
+    sc.controls.set("boom", 0.5).unwrap();
+    for _ in 0..60 {
+        sc.step_manual().unwrap();
+    }
+    let w = &sc.world;
+    assert!((w.joint_coordinate(w.joint_id("rail").unwrap()).unwrap() - 0.5).abs() < 1e-6);
+    assert!((w.max_anchor_error() - 0.5).abs() < 1e-6);
+    // What remains is the compliant sag under gravity: c m g ≈ 1e-10 · 49 N per row.
+    assert!(w.max_joint_error() < 1e-7, "{}", w.max_joint_error());
+}

@@ -338,15 +338,14 @@ fn a_server_killed_with_sigkill_restarts_cleanly() {
         while Instant::now() < end {
             if let Ok(service) =
                 node.service_builder(&name.as_str().try_into().unwrap()).publish_subscribe::<[u8]>().open()
+                && let Ok(sub) = service.subscriber_builder().create()
             {
-                if let Ok(sub) = service.subscriber_builder().create() {
-                    let end2 = Instant::now() + Duration::from_secs(2);
-                    while Instant::now() < end2 {
-                        if let Ok(Some(s)) = sub.receive() {
-                            return Some(msgs::PoseFrameView::parse(s.payload()).unwrap().sequence());
-                        }
-                        std::thread::sleep(Duration::from_millis(10));
+                let end2 = Instant::now() + Duration::from_secs(2);
+                while Instant::now() < end2 {
+                    if let Ok(Some(s)) = sub.receive() {
+                        return Some(msgs::PoseFrameView::parse(s.payload()).unwrap().sequence());
                     }
+                    std::thread::sleep(Duration::from_millis(10));
                 }
             }
             std::thread::sleep(Duration::from_millis(50));

@@ -98,6 +98,14 @@ impl JointGeometry {
         (self.p_b - self.p_a).norm()
     }
 
+    /// Anchor separation across the locked directions only (m): for a joint of `kind` with a free
+    /// linear axis (prismatic, cylindrical), the slide along that axis is the joint's coordinate,
+    /// not an error, and is left out.
+    pub fn locked_anchor_error(&self, kind: JointKind) -> f64 {
+        let d = self.p_b - self.p_a;
+        if kind.has_axis(FreeAxis::Linear) { (d - self.e[0] * self.e[0].dot(&d)).norm() } else { d.norm() }
+    }
+
     /// Linear row along `u`: `(φ, J_A, J_B)`.
     fn linear(&self, u: Vector3<f64>) -> (f64, Jac6, Jac6) {
         let phi = u.dot(&(self.p_b - self.p_a));

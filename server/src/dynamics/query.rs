@@ -165,6 +165,17 @@ impl World {
             .fold(0.0, f64::max)
     }
 
+    /// Largest position error over all enabled joints at the current poses (m): the anchor
+    /// separation across each joint's locked directions (a prismatic or cylindrical joint's slide
+    /// is its coordinate, not an error). This is the runner's and the tests' joint error.
+    pub fn max_joint_error(&self) -> f64 {
+        self.joints
+            .iter()
+            .filter(|j| j.enabled)
+            .map(|j| self.joint_geometry(j).locked_anchor_error(j.kind))
+            .fold(0.0, f64::max)
+    }
+
     pub(crate) fn joint_geometry(&self, j: &Joint) -> JointGeometry {
         let (a, b) = (self.side(Some(j.body_a)), self.side(j.body_b));
         JointGeometry::new(j, &a, &b)

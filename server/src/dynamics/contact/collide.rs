@@ -210,10 +210,26 @@ impl NarrowPhase {
                             continue; // unsupported pair (none among this slice's shapes)
                         }
                     }
+                    let first = self.points.len();
                     for m in &cache.manifolds {
                         let n = from_vec(pi.rotation * m.local_n1);
                         for p in &m.points {
                             if p.dist > margin {
+                                continue;
+                            }
+                            let (pa, pb) = (
+                                from_vec(pi.transform_point(p.local_p1)),
+                                from_vec(pj.transform_point(p.local_p2)),
+                            );
+                            // parry's manifolds of a round shape against a polygonal feature can
+                            // repeat a point (cylinder or hull against a capsule): two identical
+                            // rows make A singular and the variants' round-off differ; keep one.
+                            let duplicate = self.points[first..].iter().any(|q| {
+                                (q.pa - pa).norm_squared() <= SAME_POINT_SQ
+                                    && (q.pb - pb).norm_squared() <= SAME_POINT_SQ
+                                    && q.n.dot(&n) >= SAME_NORMAL_COS
+                            });
+                            if duplicate {
                                 continue;
                             }
                             self.points.push(ContactPoint {
@@ -222,8 +238,8 @@ impl NarrowPhase {
                                 a: bi,
                                 b: bj,
                                 features: [p.fid1.0 | tags[0], p.fid2.0 | tags[1]],
-                                pa: from_vec(pi.transform_point(p.local_p1)),
-                                pb: from_vec(pj.transform_point(p.local_p2)),
+                                pa,
+                                pb,
                                 n,
                                 dist: p.dist,
                                 mu,
