@@ -1,19 +1,149 @@
-//! `pivotsim-client`: the operator console. Its subcommands (watch, drive, send, scene, control,
-//! record, ping) arrive with the server issue; today it only reports what it knows.
+//! `pivotsim-client`: the operator console and probes of the pivotsim server.
+//!
+//! | command | what it does | transports |
+//! |---|---|---|
+//! | `watch` | live table of solver stats and body poses | zenoh, iceoryx2 |
+//! | `drive` | keyboard or gamepad → joystick frames at 30–60 Hz | zenoh, iceoryx2 |
+//! | `send` | one winch, actuator, boom or joystick command | zenoh, iceoryx2 |
+//! | `scene` | the scene description (summary or JSON) | zenoh |
+//! | `control` | pause, resume, step, reset, solver variant, load scene | zenoh |
+//! | `record` | poses, stats and inputs into an MCAP file Foxglove opens | zenoh, iceoryx2 |
+//! | `ping` | pose latency publish → receive, percentiles and histogram | zenoh, iceoryx2 |
+//!
+//! Everything stays on loopback unless told otherwise: Zenoh connects to `tcp/127.0.0.1:7447` as a
+//! peer that listens on nothing, with multicast scouting off; iceoryx2 is same-host by nature.
+//! Every loop is bounded by a count and/or a time, and Ctrl-C stops every command cleanly.
+//! Malformed frames are counted and skipped.
 
-use clap::Parser;
+mod control;
+mod drive;
+mod keymap;
+mod net;
+mod ping;
+mod record;
+mod scene;
+mod send;
+mod tojson;
+mod util;
+mod watch;
+
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::Duration;
+
+use anyhow::{Context, Result};
+use clap::{Parser, Subcommand};
+use pivotsim_msgs::WorldName;
+
+static INTERRUPTED: AtomicBool = AtomicBool::new(false);
+
+/// Whether Ctrl-C (SIGINT/SIGTERM) was received.
+pub fn interrupted() -> bool {
+    INTERRUPTED.load(Ordering::Relaxed)
+}
+
+/// Marks the run as interrupted (Ctrl-C read as a key in raw mode).
+pub fn interrupt() {
+    INTERRUPTED.store(true, Ordering::Relaxed);
+}
 
 /// Operator console and probes for the pivotsim server.
 #[derive(Debug, Parser)]
-#[command(version, about)]
-struct Cli {}
+#[command(version, about, long_about = None)]
+struct Cli {
+    #[command(flatten)]
+    common: Common,
+    #[command(subcommand)]
+    command: Command,
+}
 
-fn main() -> anyhow::Result<()> {
-    let _cli = Cli::parse();
-    eprintln!(
-        "pivotsim-client {}: no transport yet (the server issue adds watch/drive/send/record/ping); solver variants: {}",
-        env!("CARGO_PKG_VERSION"),
-        pivotsim_msgs::SOLVER_VARIANTS.join(", ")
-    );
-    Ok(())
+/// Options every command takes.
+#[derive(Debug, Clone, clap::Args)]
+pub struct Common {
+    /// World name: the `<world>` of every key and service.
+    #[arg(long, global = true, default_value = "default", value_name = "NAME")]
+    pub world: String,
+    /// Zenoh endpoint of the server (repeatable).
+    #[arg(long, global = true, default_value = "tcp/127.0.0.1:7447", value_name = "ENDPOINT")]
+    pub connect: Vec<String>,
+    /// Zenoh endpoint to listen on (repeatable; none by default: the client only connects).
+    #[arg(long, global = true, value_name = "ENDPOINT")]
+    pub listen: Vec<String>,
+    /// Seconds to wait for the server: connecting, replies, and (for watch, ping, record, send)
+    /// the longest silence before giving up. Default 5 s for one-shot commands and ping; watch and
+    /// record wait for frames indefinitely unless given.
+    #[arg(long, global = true, value_name = "SECONDS")]
+    pub timeout: Option<f64>,
+}
+
+impl Common {
+    /// The world name, checked.
+    pub fn world(&self) -> Result<WorldName> {
+        WorldName::new(self.world.clone()).with_context(|| format!("world name {:?}", self.world))
+    }
+
+    /// Zenoh endpoints.
+    pub fn zenoh(&self) -> net::ZenohOptions {
+        net::ZenohOptions { connect: self.connect.clone(), listen: self.listen.clone() }
+    }
+
+    /// The `--timeout`, or `default`.
+    pub fn timeout_or(&self, default: f64) -> Duration {
+        secs(self.timeout.unwrap_or(default))
+    }
+
+    /// Opens a Zenoh session to the server.
+    pub fn open_zenoh(&self) -> Result<net::ZenohLink> {
+        net::ZenohLink::open(&self.zenoh(), &self.world()?, self.timeout_or(5.0))
+    }
+}
+
+/// A duration from seconds (negative or non-finite: zero; huge: about a century).
+pub fn secs(s: f64) -> Duration {
+    if s.is_finite() && s > 0.0 { Duration::from_secs_f64(s.min(3.0e9)) } else { Duration::ZERO }
+}
+
+#[derive(Debug, Subcommand)]
+enum Command {
+    /// Live table of solver stats and body poses.
+    Watch(watch::Args),
+    /// Drive the scene's actuators from the keyboard or a gamepad (joystick frames).
+    Drive(drive::Args),
+    /// Send one command (winch, actuator, boom, joystick).
+    Send(send::Args),
+    /// Print the scene description.
+    Scene(scene::Args),
+    /// Pause, resume, step, reset, switch the solver variant or load a scene.
+    Control(control::Args),
+    /// Record poses, stats and inputs into an MCAP file (Foxglove opens it).
+    Record(record::Args),
+    /// Pose latency, server publish → client receive.
+    Ping(ping::Args),
+}
+
+fn main() -> std::process::ExitCode {
+    let cli = Cli::parse();
+    // iceoryx2 logs warnings such as "no config file" on stderr: errors only (IOX2_LOG_LEVEL overrides).
+    iceoryx2::prelude::set_log_level_from_env_or(iceoryx2::prelude::LogLevel::Error);
+    // A second Ctrl-C while a command is winding down exits at once.
+    let _ = ctrlc::set_handler(|| {
+        if INTERRUPTED.swap(true, Ordering::Relaxed) {
+            std::process::exit(130);
+        }
+    });
+    let r = match &cli.command {
+        Command::Watch(a) => watch::run(&cli.common, a),
+        Command::Drive(a) => drive::run(&cli.common, a),
+        Command::Send(a) => send::run(&cli.common, a),
+        Command::Scene(a) => scene::run(&cli.common, a),
+        Command::Control(a) => control::run(&cli.common, a),
+        Command::Record(a) => record::run(&cli.common, a),
+        Command::Ping(a) => ping::run(&cli.common, a),
+    };
+    match r {
+        Ok(code) => code,
+        Err(e) => {
+            eprintln!("pivotsim-client: {e:#}");
+            std::process::ExitCode::FAILURE
+        }
+    }
 }

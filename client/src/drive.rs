@@ -1,0 +1,378 @@
+//! `drive`: joystick frames from the keyboard (terminal raw mode, keys from the scene's joystick
+//! bindings, see `keymap.rs`) and/or a gamepad (gilrs, cargo feature `gamepad`), sent at `--rate`
+//! Hz (default 50) with an increasing sequence and a random source id. When the console stops
+//! sending (Esc, Ctrl-C, end of `--duration`), the server's deadman returns the actuators to
+//! neutral 250 ms later.
+//!
+//! `--axes a,b,… [--buttons BITS]` drives a constant state without keyboard or gamepad (scripts,
+//! tests); bound it with `--duration`.
+//!
+//! Gamepad mapping (the standard layout): axes 0 left stick x, 1 left stick y, 2 right stick x,
+//! 3 right stick y, 4 left trigger, 5 right trigger, 6 d-pad x, 7 d-pad y; buttons 0 south (A),
+//! 1 east (B), 2 north (Y), 3 west (X), 4 left bumper, 5 right bumper, 6 left trigger, 7 right
+//! trigger, 8 select, 9 start, 10 mode, 11 left stick, 12 right stick, 13–16 d-pad up, down,
+//! left, right. Keyboard and gamepad add up (clamped to [−1, 1]).
+
+use std::io::{IsTerminal, Write};
+use std::process::ExitCode;
+use std::time::{Duration, Instant};
+
+use anyhow::{Result, anyhow, bail};
+use crossterm::event::{Event, KeyCode, KeyEventKind, KeyModifiers};
+use pivotsim_msgs as msgs;
+use pivotsim_msgs::Topic;
+
+use crate::keymap::{KeyAction, KeyState, Layout, key_name};
+use crate::net::{InputSink, IoxInputs, Stream, TransportKind, now_ns, wait_iox_subscriber};
+use crate::{Common, interrupt, interrupted, secs};
+
+/// `drive` options.
+#[derive(Debug, clap::Args)]
+pub struct Args {
+    /// Transport to send on.
+    #[arg(long, value_enum, default_value = "zenoh")]
+    pub transport: TransportKind,
+    /// Frames per second.
+    #[arg(long, default_value_t = 50.0, value_name = "HZ")]
+    pub rate: f64,
+    /// Stop after this many seconds.
+    #[arg(long, value_name = "SECONDS")]
+    pub duration: Option<f64>,
+    /// Constant axes instead of keyboard and gamepad (comma-separated, axis 0 first).
+    #[arg(long, value_delimiter = ',', allow_hyphen_values = true, value_name = "A,B,…")]
+    pub axes: Vec<f32>,
+    /// Constant buttons (bit mask) with `--axes`.
+    #[arg(long, default_value_t = 0, value_name = "BITS")]
+    pub buttons: u64,
+    /// Lever keys (each press moves an axis by 0.25) even if the terminal reports releases.
+    #[arg(long)]
+    pub lever: bool,
+    /// Ignore gamepads.
+    #[arg(long)]
+    pub no_gamepad: bool,
+    /// Source id (default: random).
+    #[arg(long, value_name = "ID")]
+    pub source_id: Option<u32>,
+}
+
+/// Restores the terminal when dropped.
+struct RawTerminal {
+    enhanced: bool,
+}
+
+impl RawTerminal {
+    fn enter(want_releases: bool) -> Result<RawTerminal> {
+        crossterm::terminal::enable_raw_mode()?;
+        let mut t = RawTerminal { enhanced: false };
+        if want_releases && crossterm::terminal::supports_keyboard_enhancement().unwrap_or(false) {
+            use crossterm::event::{KeyboardEnhancementFlags as F, PushKeyboardEnhancementFlags};
+            crossterm::execute!(
+                std::io::stdout(),
+                PushKeyboardEnhancementFlags(F::REPORT_EVENT_TYPES | F::DISAMBIGUATE_ESCAPE_CODES)
+            )?;
+            t.enhanced = true;
+        }
+        Ok(t)
+    }
+}
+
+impl Drop for RawTerminal {
+    fn drop(&mut self) {
+        if self.enhanced {
+            let _ = crossterm::execute!(std::io::stdout(), crossterm::event::PopKeyboardEnhancementFlags);
+        }
+        let _ = crossterm::terminal::disable_raw_mode();
+    }
+}
+
+#[cfg(feature = "gamepad")]
+mod pad {
+    use gilrs::{Axis, Button, Gilrs};
+
+    pub const AXES: [Axis; 8] = [
+        Axis::LeftStickX,
+        Axis::LeftStickY,
+        Axis::RightStickX,
+        Axis::RightStickY,
+        Axis::LeftZ,
+        Axis::RightZ,
+        Axis::DPadX,
+        Axis::DPadY,
+    ];
+    pub const BUTTONS: [Button; 17] = [
+        Button::South,
+        Button::East,
+        Button::North,
+        Button::West,
+        Button::LeftTrigger,
+        Button::RightTrigger,
+        Button::LeftTrigger2,
+        Button::RightTrigger2,
+        Button::Select,
+        Button::Start,
+        Button::Mode,
+        Button::LeftThumb,
+        Button::RightThumb,
+        Button::DPadUp,
+        Button::DPadDown,
+        Button::DPadLeft,
+        Button::DPadRight,
+    ];
+    const DEADZONE: f32 = 0.05;
+
+    pub struct Pad {
+        gilrs: Gilrs,
+    }
+
+    impl Pad {
+        /// gilrs, if it starts (no udev, no permissions: `None`).
+        pub fn open() -> Option<Pad> {
+            Gilrs::new().ok().map(|gilrs| Pad { gilrs })
+        }
+
+        /// Name of the first connected gamepad.
+        pub fn name(&self) -> Option<String> {
+            self.gilrs.gamepads().find(|(_, g)| g.is_connected()).map(|(_, g)| g.name().to_string())
+        }
+
+        /// Axes and buttons of the first connected gamepad (events drained first).
+        pub fn read(&mut self) -> Option<([f32; 8], u64)> {
+            while self.gilrs.next_event().is_some() {}
+            let (_, g) = self.gilrs.gamepads().find(|(_, g)| g.is_connected())?;
+            let mut axes = [0.0f32; 8];
+            for (v, a) in axes.iter_mut().zip(AXES) {
+                let x = g.value(a);
+                *v = if x.is_finite() && x.abs() >= DEADZONE { x.clamp(-1.0, 1.0) } else { 0.0 };
+            }
+            let mut buttons = 0u64;
+            for (i, b) in BUTTONS.iter().enumerate() {
+                if g.is_pressed(*b) {
+                    buttons |= 1 << i;
+                }
+            }
+            Some((axes, buttons))
+        }
+    }
+}
+
+#[cfg(not(feature = "gamepad"))]
+mod pad {
+    pub struct Pad;
+
+    impl Pad {
+        pub fn open() -> Option<Pad> {
+            None
+        }
+
+        pub fn name(&self) -> Option<String> {
+            None
+        }
+
+        pub fn read(&mut self) -> Option<([f32; 8], u64)> {
+            None
+        }
+    }
+}
+
+fn bar(v: f32) -> String {
+    let n = 5;
+    let k = (v.abs() * n as f32).round() as usize;
+    let (l, r) = if v < 0.0 {
+        (format!("{}{}", " ".repeat(n - k), "=".repeat(k)), " ".repeat(n))
+    } else {
+        (" ".repeat(n), format!("{}{}", "=".repeat(k), " ".repeat(n - k)))
+    };
+    format!("[{l}|{r}]")
+}
+
+/// Runs `drive`.
+pub fn run(common: &Common, args: &Args) -> Result<ExitCode> {
+    let timeout = common.timeout_or(5.0);
+    let world = common.world()?;
+    let scripted = !args.axes.is_empty();
+    if args.axes.len() > msgs::MAX_AXES {
+        bail!("{} axes (at most {})", args.axes.len(), msgs::MAX_AXES);
+    }
+    if args.axes.iter().any(|a| !(a.is_finite() && (-1.0..=1.0).contains(a))) {
+        bail!("axis values must be in [-1, 1]");
+    }
+    let link = match args.transport {
+        TransportKind::Zenoh => Some(common.open_zenoh()?),
+        TransportKind::Iceoryx2 => None,
+    };
+    let scene = crate::util::scene_best_effort(
+        common,
+        link.as_ref(),
+        if link.is_some() { timeout } else { timeout.min(Duration::from_secs(1)) },
+    );
+    let layout = Layout::from_scene(scene.as_ref());
+    let mut pad = if scripted || args.no_gamepad { None } else { pad::Pad::open() };
+    let pad_name = pad.as_ref().and_then(|p| p.name());
+    let tty = std::io::stdin().is_terminal() && std::io::stdout().is_terminal();
+    if !scripted && !tty && pad_name.is_none() {
+        bail!("drive needs a terminal (keyboard), a gamepad, or --axes");
+    }
+    let mut sink = match args.transport {
+        TransportKind::Zenoh => InputSink::Zenoh { publishers: Vec::new() },
+        TransportKind::Iceoryx2 => {
+            let p = IoxInputs::open(&world)?;
+            wait_iox_subscriber(&p, timeout)?;
+            InputSink::Iox(p)
+        }
+    };
+    // Stats for the status line (best effort).
+    let stats =
+        Stream::open(common, args.transport, &[Topic::Stats], 64, Duration::from_millis(2), None).ok();
+    let source = args.source_id.unwrap_or_else(crate::util::random_u32);
+    let period = secs(1.0 / args.rate.clamp(1.0, 200.0));
+    let end = args.duration.map(|d| Instant::now() + secs(d));
+    let use_keys = !scripted && tty;
+    let mut keys = KeyState::new(&layout, false);
+    let raw = if use_keys {
+        let t = RawTerminal::enter(!args.lever)?;
+        keys.hold = t.enhanced;
+        Some(t)
+    } else {
+        None
+    };
+    let nl = if raw.is_some() { "\r\n" } else { "\n" };
+    {
+        let mut out = std::io::stdout().lock();
+        let scene_name = scene.as_ref().map_or("?", |s| s.scene.as_str());
+        write!(
+            out,
+            "driving scene `{scene_name}` (world `{world}`) via {:?}, source {source:#010x}{nl}",
+            args.transport
+        )?;
+        if let Some(n) = &pad_name {
+            write!(out, "gamepad: {n}{nl}")?;
+        }
+        if use_keys {
+            let mode = if keys.hold { "hold keys" } else { "lever keys: each press moves 0.25" };
+            write!(out, "keyboard ({mode}); Space centres, Esc or Ctrl-C quits{nl}")?;
+            for l in layout.help() {
+                write!(out, "  {l}{nl}")?;
+            }
+        }
+        out.flush()?;
+    }
+    let axis_count = if scripted {
+        args.axes.len()
+    } else {
+        layout.axis_count().max(if pad_name.is_some() { 8 } else { 0 }).max(1)
+    };
+    let button_count = if scripted {
+        (64 - args.buttons.leading_zeros()) as usize
+    } else {
+        layout.button_count().max(if pad_name.is_some() { 17 } else { 0 })
+    };
+    let mut seq = now_ns();
+    let mut sent = 0u64;
+    let mut errors = 0u64;
+    let mut next = Instant::now();
+    let mut last_status = Instant::now();
+    let mut server = String::new();
+    let mut buf = Vec::new();
+    let result: Result<()> = (|| {
+        loop {
+            if interrupted() || end.is_some_and(|e| Instant::now() >= e) {
+                return Ok(());
+            }
+            // Keys until the next frame is due.
+            if use_keys {
+                while crossterm::event::poll(next.saturating_duration_since(Instant::now()))? {
+                    if let Event::Key(k) = crossterm::event::read()? {
+                        let ctrl_c =
+                            k.code == KeyCode::Char('c') && k.modifiers.contains(KeyModifiers::CONTROL);
+                        if k.code == KeyCode::Esc || ctrl_c {
+                            interrupt();
+                            return Ok(());
+                        }
+                        let action = if k.kind == KeyEventKind::Release {
+                            KeyAction::Release
+                        } else {
+                            KeyAction::Press
+                        };
+                        keys.key(&layout, k.code, action, k.kind == KeyEventKind::Repeat);
+                    }
+                    if Instant::now() >= next {
+                        break;
+                    }
+                }
+            } else {
+                std::thread::sleep(next.saturating_duration_since(Instant::now()));
+            }
+            next += period;
+            if next < Instant::now() {
+                next = Instant::now() + period;
+            }
+            // The state: constant, or keyboard + gamepad.
+            let mut axes = [0.0f32; msgs::MAX_AXES];
+            let mut buttons;
+            if scripted {
+                axes[..args.axes.len()].copy_from_slice(&args.axes);
+                buttons = args.buttons;
+            } else {
+                axes = keys.axes;
+                buttons = keys.buttons;
+                if let Some((pa, pb)) = pad.as_mut().and_then(|p| p.read()) {
+                    for (a, p) in axes.iter_mut().zip(pa) {
+                        *a = (*a + p).clamp(-1.0, 1.0);
+                    }
+                    buttons |= pb;
+                }
+            }
+            if button_count < 64 {
+                buttons &= (1u64 << button_count) - 1;
+            }
+            seq += 1;
+            let j = msgs::Joystick::new(seq, source, &axes[..axis_count], buttons, button_count as u8)
+                .ok_or_else(|| anyhow!("joystick state"))?;
+            msgs::InputCommand::Joystick(j).encode(&mut buf).map_err(|e| anyhow!("joystick: {e}"))?;
+            match sink.send(link.as_ref(), Topic::Joystick, &buf, timeout) {
+                Ok(()) => sent += 1,
+                Err(e) => {
+                    errors += 1;
+                    if errors == 1 {
+                        eprint!("pivotsim-client: {e:#}{nl}");
+                    }
+                    if sent == 0 && errors >= 3 {
+                        return Err(e);
+                    }
+                }
+            }
+            if let Some(s) = &stats {
+                while let Some(r) = s.inbox.try_recv() {
+                    if let Ok(st) = msgs::SolverStats::decode(&r.bytes) {
+                        server = format!(
+                            "server: accepted {} rejected {}{}",
+                            st.inputs.accepted,
+                            st.inputs.rejected_total(),
+                            if st.inputs.deadman_active { " DEADMAN" } else { "" }
+                        );
+                    }
+                }
+            }
+            if raw.is_some() && last_status.elapsed() >= Duration::from_millis(100) {
+                last_status = Instant::now();
+                let shown: Vec<String> = layout
+                    .axes
+                    .iter()
+                    .map(|a| {
+                        format!("{}{}{}", key_name(a.plus), bar(axes[a.axis as usize]), key_name(a.minus))
+                    })
+                    .collect();
+                let mut out = std::io::stdout().lock();
+                write!(out, "\r{}  buttons {:#x}  sent {sent}  {server}\x1b[K", shown.join(" "), buttons)?;
+                out.flush()?;
+            }
+        }
+    })();
+    drop(raw);
+    println!(
+        "{}sent {sent} joystick frames as source {source:#010x} ({errors} send errors)",
+        if use_keys { "\n" } else { "" }
+    );
+    result?;
+    Ok(ExitCode::SUCCESS)
+}

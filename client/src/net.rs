@@ -1,0 +1,590 @@
+//! The two transports as the console sees them: a stream of received frames (poses, stats,
+//! inputs), input publishing, and (Zenoh only) the `scene` and `control` queries.
+//!
+//! Received frames are handed over through a bounded channel ([`Inbox`]): Zenoh delivers them in
+//! subscriber callbacks, iceoryx2 in a polling thread that owns the node and its subscribers.
+//! Each frame is stamped with its receive time (ns since the UNIX epoch) where it arrives, so
+//! latency probes do not count the time a frame waits in the channel. A full channel drops the
+//! frame and counts it ([`Inbox::dropped`]); nothing blocks a transport thread.
+
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+use std::sync::mpsc::{Receiver, SyncSender, TrySendError, sync_channel};
+use std::thread::JoinHandle;
+use std::time::{Duration, Instant};
+
+use anyhow::{Context, Result, anyhow, bail};
+use iceoryx2::port::publisher::Publisher;
+use iceoryx2::prelude::*;
+use pivotsim_msgs as msgs;
+use pivotsim_msgs::{Topic, WorldName};
+use zenoh::Wait;
+
+/// Nanoseconds since the UNIX epoch.
+pub fn now_ns() -> u64 {
+    std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).map_or(0, |d| d.as_nanos() as u64)
+}
+
+/// Which transport carries frames.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum TransportKind {
+    /// Zenoh peer session (TCP, any host).
+    Zenoh,
+    /// iceoryx2 shared memory (same host only).
+    Iceoryx2,
+}
+
+/// How to reach the server over Zenoh.
+#[derive(Debug, Clone)]
+pub struct ZenohOptions {
+    /// Endpoints to connect to (the server's listener).
+    pub connect: Vec<String>,
+    /// Endpoints to listen on (none by default).
+    pub listen: Vec<String>,
+}
+
+/// A frame as received.
+#[derive(Debug, Clone)]
+pub struct Received {
+    /// What it arrived on (`None`: a key or service that is not a known topic).
+    pub topic: Option<Topic>,
+    /// Receive time (ns since the UNIX epoch), taken as the transport handed it over.
+    pub recv_ns: u64,
+    /// The frame bytes.
+    pub bytes: Vec<u8>,
+}
+
+/// Frames delivered by the transports, with a drop counter.
+#[derive(Debug)]
+pub struct Inbox {
+    rx: Receiver<Received>,
+    dropped: Arc<AtomicU64>,
+}
+
+/// The sending side of an [`Inbox`], cloned into callbacks and threads.
+#[derive(Debug, Clone)]
+pub struct InboxSender {
+    tx: SyncSender<Received>,
+    dropped: Arc<AtomicU64>,
+}
+
+impl InboxSender {
+    /// Offers a frame; a full or closed inbox drops it (counted).
+    pub fn offer(&self, r: Received) {
+        match self.tx.try_send(r) {
+            Ok(()) => {}
+            Err(TrySendError::Full(_) | TrySendError::Disconnected(_)) => {
+                self.dropped.fetch_add(1, Ordering::Relaxed);
+            }
+        }
+    }
+}
+
+/// A bounded inbox of `capacity` frames.
+pub fn inbox(capacity: usize) -> (InboxSender, Inbox) {
+    let (tx, rx) = sync_channel(capacity);
+    let dropped = Arc::new(AtomicU64::new(0));
+    (InboxSender { tx, dropped: dropped.clone() }, Inbox { rx, dropped })
+}
+
+impl Inbox {
+    /// The next frame, waiting at most `timeout` (`None` on timeout or when every sender is gone).
+    pub fn recv_timeout(&self, timeout: Duration) -> Option<Received> {
+        self.rx.recv_timeout(timeout).ok()
+    }
+
+    /// A frame if one is waiting.
+    pub fn try_recv(&self) -> Option<Received> {
+        self.rx.try_recv().ok()
+    }
+
+    /// Frames dropped because the inbox was full.
+    pub fn dropped(&self) -> u64 {
+        self.dropped.load(Ordering::Relaxed)
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Zenoh
+
+/// The client's Zenoh configuration: a peer, multicast scouting off, listening on `listen`
+/// (nothing by default), connecting to `connect`.
+pub fn zenoh_config(opts: &ZenohOptions) -> Result<zenoh::Config> {
+    let mut c = zenoh::Config::default();
+    let json = |v: &[String]| serde_json::to_string(v).expect("strings serialize");
+    let set = |c: &mut zenoh::Config, k: &str, v: &str| {
+        c.insert_json5(k, v).map_err(|e| anyhow!("zenoh config `{k}` = {v}: {e}"))
+    };
+    set(&mut c, "mode", "\"peer\"")?;
+    set(&mut c, "connect/endpoints", &json(&opts.connect))?;
+    set(&mut c, "listen/endpoints", &json(&opts.listen))?;
+    set(&mut c, "scouting/multicast/enabled", "false")?;
+    Ok(c)
+}
+
+/// A Zenoh session connected to the server.
+pub struct ZenohLink {
+    session: zenoh::Session,
+    world: WorldName,
+    subscribers: Vec<zenoh::pubsub::Subscriber<()>>,
+}
+
+impl std::fmt::Debug for ZenohLink {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("ZenohLink").field("world", &self.world).finish()
+    }
+}
+
+impl ZenohLink {
+    /// Opens the session and waits (at most `timeout`) until it is connected to at least one peer.
+    pub fn open(opts: &ZenohOptions, world: &WorldName, timeout: Duration) -> Result<ZenohLink> {
+        let session = zenoh::open(zenoh_config(opts)?)
+            .wait()
+            .map_err(|e| anyhow!("zenoh: cannot open a session: {e}"))?;
+        let deadline = Instant::now() + timeout;
+        loop {
+            let peers = session.info().peers_zid().wait().count();
+            if peers > 0 {
+                break;
+            }
+            if Instant::now() >= deadline || crate::interrupted() {
+                bail!(
+                    "zenoh: no peer reachable at {} within {:.1} s (is `pivotsim-server serve` running?)",
+                    opts.connect.join(", "),
+                    timeout.as_secs_f64()
+                );
+            }
+            std::thread::sleep(Duration::from_millis(10));
+        }
+        Ok(ZenohLink { session, world: world.clone(), subscribers: Vec::new() })
+    }
+
+    /// The session.
+    pub fn session(&self) -> &zenoh::Session {
+        &self.session
+    }
+
+    /// Subscribes to `key`, handing frames to `tx` tagged with the key's topic.
+    pub fn subscribe_key(&mut self, key: String, tx: &InboxSender) -> Result<()> {
+        let tx = tx.clone();
+        let sub = self
+            .session
+            .declare_subscriber(key.clone())
+            .callback(move |sample| {
+                let recv_ns = now_ns();
+                let topic = msgs::parse_key(sample.key_expr().as_str()).ok().map(|(_, t)| t);
+                tx.offer(Received { topic, recv_ns, bytes: sample.payload().to_bytes().into_owned() });
+            })
+            .wait()
+            .map_err(|e| anyhow!("zenoh: cannot subscribe to {key}: {e}"))?;
+        self.subscribers.push(sub);
+        Ok(())
+    }
+
+    /// Subscribes to the given topics of the world (inputs through one `cmd/**` subscriber).
+    pub fn subscribe(&mut self, topics: &[Topic], tx: &InboxSender) -> Result<()> {
+        let mut inputs = false;
+        for &t in topics {
+            if Topic::INPUTS.contains(&t) {
+                if !inputs {
+                    inputs = true;
+                    self.subscribe_key(msgs::inputs_wildcard(&self.world), tx)?;
+                }
+            } else {
+                self.subscribe_key(self.world.key(t), tx)?;
+            }
+        }
+        Ok(())
+    }
+
+    /// Declares a publisher for an input topic and waits (at most `timeout`) until the server's
+    /// subscriber matches it, so that the first frame is not lost.
+    pub fn input_publisher(
+        &self,
+        topic: Topic,
+        timeout: Duration,
+    ) -> Result<zenoh::pubsub::Publisher<'static>> {
+        let key = self.world.key(topic);
+        let p = self
+            .session
+            .declare_publisher(key.clone())
+            .encoding(zenoh::bytes::Encoding::APPLICATION_OCTET_STREAM)
+            .wait()
+            .map_err(|e| anyhow!("zenoh: cannot declare a publisher on {key}: {e}"))?;
+        let deadline = Instant::now() + timeout;
+        while !p.matching_status().wait().map(|m| m.matching()).unwrap_or(false) {
+            if Instant::now() >= deadline || crate::interrupted() {
+                bail!("zenoh: nobody subscribes to {key} (no server for world `{}`?)", self.world);
+            }
+            std::thread::sleep(Duration::from_millis(5));
+        }
+        Ok(p)
+    }
+
+    /// Queries `key` with an optional payload; returns the first reply's payload, or `None` when no
+    /// queryable answered. Errors on a reply error or when `timeout` passes without a reply.
+    pub fn query(&self, key: &str, payload: Option<Vec<u8>>, timeout: Duration) -> Result<Option<Vec<u8>>> {
+        let mut get = self.session.get(key).timeout(timeout);
+        if let Some(p) = payload {
+            get = get.payload(p);
+        }
+        let replies = get.wait().map_err(|e| anyhow!("zenoh: query {key}: {e}"))?;
+        let wait = timeout + Duration::from_millis(100);
+        match replies.recv_timeout(wait) {
+            Ok(Some(reply)) => match reply.result() {
+                Ok(sample) => Ok(Some(sample.payload().to_bytes().into_owned())),
+                Err(e) => {
+                    let msg = e.payload().try_to_string().map(|s| s.into_owned()).unwrap_or_default();
+                    if msg.contains("Timeout") || msg.is_empty() {
+                        bail!("zenoh: no reply to {key} within {:.1} s", timeout.as_secs_f64())
+                    } else {
+                        bail!("zenoh: query {key} failed: {msg}")
+                    }
+                }
+            },
+            // The query finished without any reply: nobody answered.
+            Err(_) => Ok(None),
+            Ok(None) => bail!("zenoh: no reply to {key} within {:.1} s", timeout.as_secs_f64()),
+        }
+    }
+
+    /// Queries `key` until a queryable answers (a session may need a moment before the server's
+    /// queryable is known), retrying while nobody answered, for at most `timeout` in all.
+    pub fn query_retrying(&self, key: &str, payload: Option<Vec<u8>>, timeout: Duration) -> Result<Vec<u8>> {
+        let deadline = Instant::now() + timeout;
+        loop {
+            let left = deadline.saturating_duration_since(Instant::now()).max(Duration::from_millis(50));
+            if let Some(r) = self.query(key, payload.clone(), left)? {
+                return Ok(r);
+            }
+            if Instant::now() >= deadline || crate::interrupted() {
+                bail!("zenoh: nothing answers {key} (no server for world `{}`?)", self.world);
+            }
+            std::thread::sleep(Duration::from_millis(20));
+        }
+    }
+
+    /// The server's scene description.
+    pub fn scene(&self, timeout: Duration) -> Result<msgs::SceneDescription> {
+        let bytes = self.query_retrying(&self.world.key(Topic::Scene), None, timeout)?;
+        msgs::SceneDescription::decode(&bytes).context("the scene reply does not decode")
+    }
+
+    /// Sends a control request and returns the decoded reply.
+    ///
+    /// A request is sent again only while no queryable answered at all (the server never saw it),
+    /// so a `step` is never applied twice.
+    pub fn control(&self, req: &msgs::ControlRequest, timeout: Duration) -> Result<msgs::ControlReply> {
+        let mut buf = Vec::new();
+        req.encode(&mut buf).context("control request")?;
+        let bytes = self.query_retrying(&self.world.key(Topic::Control), Some(buf), timeout)?;
+        msgs::ControlReply::decode(&bytes).context("the control reply does not decode")
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// iceoryx2
+
+/// The iceoryx2 service name of a world's `what` (`poses`, `stats`, `cmd`).
+pub fn iox_service_name(world: &WorldName, what: &str) -> String {
+    format!("{}/{}/{}", msgs::KEY_PREFIX, world.as_str(), what)
+}
+
+/// Longest initial input frame on the `cmd` service (a boom command of 16 targets is 672 bytes).
+pub const IOX_INPUT_SLICE: usize = 4096;
+/// The server's subscriber buffer size; requested with the same value so that either side may
+/// create the service and the other still opens it.
+pub const IOX_SUBSCRIBER_BUFFER: usize = 16;
+
+type IoxService = iceoryx2::service::port_factory::publish_subscribe::PortFactory<ipc::Service, [u8], ()>;
+
+fn iox_err(what: &str) -> impl Fn(&dyn std::fmt::Debug) -> anyhow::Error + '_ {
+    move |e| anyhow!("iceoryx2: {what}: {e:?}")
+}
+
+fn iox_node() -> Result<Node<ipc::Service>> {
+    NodeBuilder::new()
+        .name(&"pivotsim-client".try_into().map_err(|e| iox_err("node name")(&e))?)
+        .signal_handling_mode(SignalHandlingMode::Disabled)
+        .create::<ipc::Service>()
+        .map_err(|e| iox_err("cannot create a node")(&e))
+}
+
+fn iox_service(node: &Node<ipc::Service>, name: &str) -> Result<IoxService> {
+    let sn: ServiceName = name.try_into().map_err(|e| iox_err(name)(&e))?;
+    node.service_builder(&sn)
+        .publish_subscribe::<[u8]>()
+        .enable_safe_overflow(true)
+        .subscriber_max_buffer_size(IOX_SUBSCRIBER_BUFFER)
+        .open_or_create()
+        .map_err(|e| iox_err(&format!("cannot open service {name}"))(&e))
+}
+
+/// A thread polling iceoryx2 subscribers into an inbox; stops when dropped.
+pub struct IoxReceiver {
+    stop: Arc<AtomicBool>,
+    thread: Option<JoinHandle<()>>,
+}
+
+impl std::fmt::Debug for IoxReceiver {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str("IoxReceiver")
+    }
+}
+
+impl IoxReceiver {
+    /// Opens the services of `topics` (inputs: the one `cmd` service) and polls them every
+    /// `poll` (zero: spin, yielding the CPU between polls).
+    pub fn start(
+        world: &WorldName,
+        topics: &[Topic],
+        tx: &InboxSender,
+        poll: Duration,
+    ) -> Result<IoxReceiver> {
+        let mut names: Vec<(Option<Topic>, String)> = Vec::new();
+        for &t in topics {
+            match t {
+                Topic::Poses | Topic::Stats => names.push((Some(t), iox_service_name(world, t.suffix()))),
+                t if Topic::INPUTS.contains(&t) => {
+                    if !names.iter().any(|(_, n)| n.ends_with("/cmd")) {
+                        names.push((None, iox_service_name(world, "cmd")));
+                    }
+                }
+                _ => bail!("iceoryx2 carries no {} service", t.suffix()),
+            }
+        }
+        let stop = Arc::new(AtomicBool::new(false));
+        let (ready_tx, ready_rx) = sync_channel::<Result<()>>(1);
+        let tx = tx.clone();
+        let stop2 = stop.clone();
+        let thread = std::thread::Builder::new()
+            .name("iox-recv".into())
+            .spawn(move || {
+                let setup = || -> Result<_> {
+                    let node = iox_node()?;
+                    let mut subs = Vec::new();
+                    let mut services = Vec::new();
+                    for (topic, name) in &names {
+                        let s = iox_service(&node, name)?;
+                        let sub = s
+                            .subscriber_builder()
+                            .buffer_size(IOX_SUBSCRIBER_BUFFER)
+                            .create()
+                            .map_err(|e| iox_err(&format!("cannot subscribe to {name}"))(&e))?;
+                        subs.push((*topic, sub));
+                        services.push(s);
+                    }
+                    Ok((node, services, subs))
+                };
+                let (node, services, subs) = match setup() {
+                    Ok(v) => {
+                        let _ = ready_tx.send(Ok(()));
+                        v
+                    }
+                    Err(e) => {
+                        let _ = ready_tx.send(Err(e));
+                        return;
+                    }
+                };
+                while !stop2.load(Ordering::Relaxed) {
+                    let mut any = false;
+                    for (topic, sub) in &subs {
+                        // Bounded per round so that one busy service cannot starve the others.
+                        for _ in 0..64 {
+                            match sub.receive() {
+                                Ok(Some(sample)) => {
+                                    let recv_ns = now_ns();
+                                    let bytes = sample.payload().to_vec();
+                                    // Inputs on `cmd`: the frame's own kind names the topic.
+                                    let topic = topic.or_else(|| input_topic(&bytes));
+                                    tx.offer(Received { topic, recv_ns, bytes });
+                                    any = true;
+                                }
+                                Ok(None) => break,
+                                Err(_) => break,
+                            }
+                        }
+                    }
+                    if !any {
+                        if poll.is_zero() {
+                            std::thread::yield_now();
+                        } else {
+                            std::thread::sleep(poll);
+                        }
+                    }
+                }
+                drop(subs);
+                drop(services);
+                drop(node);
+            })
+            .context("cannot start the iceoryx2 thread")?;
+        match ready_rx.recv() {
+            Ok(Ok(())) => Ok(IoxReceiver { stop, thread: Some(thread) }),
+            Ok(Err(e)) => {
+                let _ = thread.join();
+                Err(e)
+            }
+            Err(_) => {
+                let _ = thread.join();
+                bail!("iceoryx2: the receiving thread stopped")
+            }
+        }
+    }
+}
+
+impl Drop for IoxReceiver {
+    fn drop(&mut self) {
+        self.stop.store(true, Ordering::Relaxed);
+        if let Some(t) = self.thread.take() {
+            let _ = t.join();
+        }
+    }
+}
+
+/// The input topic of a frame by its header kind.
+pub fn input_topic(bytes: &[u8]) -> Option<Topic> {
+    let h = msgs::header::peek(bytes).ok()?;
+    Topic::INPUTS.into_iter().find(|t| t.kind() == Some(h.kind))
+}
+
+/// An iceoryx2 publisher on the world's `cmd` service.
+pub struct IoxInputs {
+    publisher: Publisher<ipc::Service, [u8], ()>,
+    service: IoxService,
+    _node: Node<ipc::Service>,
+}
+
+impl std::fmt::Debug for IoxInputs {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str("IoxInputs")
+    }
+}
+
+impl IoxInputs {
+    /// Opens (or creates) the `cmd` service and a publisher on it.
+    pub fn open(world: &WorldName) -> Result<IoxInputs> {
+        let node = iox_node()?;
+        let service = iox_service(&node, &iox_service_name(world, "cmd"))?;
+        let publisher = service
+            .publisher_builder()
+            .initial_max_slice_len(IOX_INPUT_SLICE)
+            .allocation_strategy(AllocationStrategy::PowerOfTwo)
+            .create()
+            .map_err(|e| iox_err("cannot create the cmd publisher")(&e))?;
+        Ok(IoxInputs { publisher, service, _node: node })
+    }
+
+    /// Subscribers of the `cmd` service (the server is one).
+    pub fn subscribers(&self) -> usize {
+        self.service.dynamic_config().number_of_subscribers()
+    }
+
+    /// Publishes one frame; returns how many subscribers got it.
+    pub fn send(&self, bytes: &[u8]) -> Result<usize> {
+        let sample = self.publisher.loan_slice_uninit(bytes.len()).map_err(|e| iox_err("loan")(&e))?;
+        let sample = sample.write_from_slice(bytes);
+        sample.send().map_err(|e| iox_err("send")(&e))
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Both
+
+/// Where inputs go.
+#[derive(Debug)]
+pub enum InputSink {
+    /// One Zenoh publisher per input topic (declared on first use).
+    Zenoh { publishers: Vec<(Topic, zenoh::pubsub::Publisher<'static>)> },
+    /// The iceoryx2 `cmd` service.
+    Iox(IoxInputs),
+}
+
+impl InputSink {
+    /// Publishes an encoded input frame on its topic.
+    pub fn send(
+        &mut self,
+        link: Option<&ZenohLink>,
+        topic: Topic,
+        bytes: &[u8],
+        timeout: Duration,
+    ) -> Result<()> {
+        match self {
+            InputSink::Zenoh { publishers } => {
+                let i = match publishers.iter().position(|(t, _)| *t == topic) {
+                    Some(i) => i,
+                    None => {
+                        let link = link.ok_or_else(|| anyhow!("no zenoh session"))?;
+                        publishers.push((topic, link.input_publisher(topic, timeout)?));
+                        publishers.len() - 1
+                    }
+                };
+                publishers[i].1.put(bytes.to_vec()).wait().map_err(|e| anyhow!("zenoh: put: {e}"))
+            }
+            InputSink::Iox(p) => {
+                let n = p.send(bytes)?;
+                if n == 0 {
+                    bail!(
+                        "iceoryx2: nobody subscribes to the cmd service (no server for this world on this host?)"
+                    );
+                }
+                Ok(())
+            }
+        }
+    }
+}
+
+/// Waits until the iceoryx2 `cmd` service has a subscriber (the server), at most `timeout`.
+pub fn wait_iox_subscriber(p: &IoxInputs, timeout: Duration) -> Result<()> {
+    let deadline = Instant::now() + timeout;
+    while p.subscribers() == 0 {
+        if Instant::now() >= deadline || crate::interrupted() {
+            bail!("iceoryx2: nobody subscribes to the cmd service (no server for this world on this host?)");
+        }
+        std::thread::sleep(Duration::from_millis(5));
+    }
+    Ok(())
+}
+
+/// Frames of some topics over one transport, with the Zenoh session when there is one.
+#[derive(Debug)]
+pub struct Stream {
+    /// Received frames.
+    pub inbox: Inbox,
+    zenoh: Option<ZenohLink>,
+    _iox: Option<IoxReceiver>,
+}
+
+impl Stream {
+    /// Subscribes to `topics` over `transport`. Zenoh: `zenoh` is used if given, else a session
+    /// is opened. iceoryx2: services are polled every `poll` (zero: spin); `zenoh` is kept for
+    /// queries.
+    pub fn open(
+        common: &crate::Common,
+        transport: TransportKind,
+        topics: &[Topic],
+        capacity: usize,
+        poll: Duration,
+        zenoh: Option<ZenohLink>,
+    ) -> Result<Stream> {
+        let (tx, inbox) = inbox(capacity);
+        match transport {
+            TransportKind::Zenoh => {
+                let mut link = match zenoh {
+                    Some(l) => l,
+                    None => common.open_zenoh()?,
+                };
+                link.subscribe(topics, &tx)?;
+                Ok(Stream { inbox, zenoh: Some(link), _iox: None })
+            }
+            TransportKind::Iceoryx2 => {
+                let r = IoxReceiver::start(&common.world()?, topics, &tx, poll)?;
+                Ok(Stream { inbox, zenoh, _iox: Some(r) })
+            }
+        }
+    }
+
+    /// The Zenoh session, if any.
+    pub fn zenoh(&self) -> Option<&ZenohLink> {
+        self.zenoh.as_ref()
+    }
+}

@@ -1,0 +1,271 @@
+//! `record`: poses, stats and operator inputs seen on the wire, into an MCAP file.
+//!
+//! **Format.** Every channel has message encoding `json` and a `jsonschema` schema, the form
+//! Foxglove (and `mcap` tooling) opens without plugins; chunks are zstd-compressed. Channels:
+//!
+//! | topic | schema | content |
+//! |---|---|---|
+//! | `pivotsim/<world>/poses` | `pivotsim.PoseFrame` | sequence, sim time, wall time, every body (id, name, position, orientation, velocities) |
+//! | `pivotsim/<world>/stats` | `pivotsim.SolverStats` | the stats frame, per-island records, input counters by reject reason |
+//! | `pivotsim/<world>/tf` | `foxglove.FrameTransforms` | `world` → body name transforms: the 3D panel shows every body's frame |
+//! | `pivotsim/<world>/scene` | `pivotsim.SceneDescription` | the scene description once at the start (when the server answers) |
+//! | `pivotsim/<world>/cmd/joystick` … `cmd/actuator` | `pivotsim.Joystick` … | inputs, as seen (channel added at the first one) |
+//!
+//! Log time is the receive time; publish time is the server's `wall_time_ns` for poses and
+//! transforms, the receive time otherwise. The message sequence is the step number for poses,
+//! stats and transforms, a counter for inputs.
+//!
+//! **Which inputs are seen.** iceoryx2: every input published on the host's `cmd` service.
+//! Zenoh: inputs of the peers this client is connected to; peers do not forward each other's
+//! traffic, so inputs that other consoles send to the server are only seen when they also connect
+//! to this recorder (`record --listen tcp/127.0.0.1:PORT`, the console `--connect` to both).
+
+use std::collections::BTreeMap;
+use std::fs::File;
+use std::io::{BufWriter, IsTerminal, Write};
+use std::path::PathBuf;
+use std::process::ExitCode;
+use std::time::{Duration, Instant};
+
+use anyhow::{Context, Result, bail};
+use pivotsim_msgs as msgs;
+use pivotsim_msgs::Topic;
+
+use crate::net::{Stream, TransportKind};
+use crate::tojson;
+use crate::{Common, interrupted, secs};
+
+/// `record` options.
+#[derive(Debug, clap::Args)]
+pub struct Args {
+    /// Output file (`.mcap`).
+    pub file: PathBuf,
+    /// Transport to record from.
+    #[arg(long, value_enum, default_value = "zenoh")]
+    pub transport: TransportKind,
+    /// Stop after this many seconds (default: at Ctrl-C).
+    #[arg(long, value_name = "SECONDS")]
+    pub duration: Option<f64>,
+    /// Stop after this many pose frames.
+    #[arg(long, value_name = "N")]
+    pub count: Option<u64>,
+    /// Leave out the `foxglove.FrameTransforms` channel.
+    #[arg(long)]
+    pub no_tf: bool,
+}
+
+struct Channels {
+    poses: u16,
+    stats: u16,
+    tf: Option<u16>,
+    inputs: Vec<(Topic, u16)>,
+    input_seq: u32,
+}
+
+fn add_json_channel(
+    w: &mut mcap::Writer<BufWriter<File>>,
+    topic: &str,
+    schema_name: &str,
+    schema: &serde_json::Value,
+) -> Result<u16> {
+    let schema_id = w.add_schema(schema_name, "jsonschema", serde_json::to_string(schema)?.as_bytes())?;
+    Ok(w.add_channel(schema_id, topic, "json", &BTreeMap::new())?)
+}
+
+fn write(
+    w: &mut mcap::Writer<BufWriter<File>>,
+    channel: u16,
+    seq: u32,
+    log: u64,
+    publish: u64,
+    v: &serde_json::Value,
+) -> Result<()> {
+    let data = serde_json::to_vec(v)?;
+    let header = mcap::records::MessageHeader {
+        channel_id: channel,
+        sequence: seq,
+        log_time: log,
+        publish_time: publish,
+    };
+    w.write_to_known_channel(&header, &data)?;
+    Ok(())
+}
+
+/// Runs `record`.
+pub fn run(common: &Common, args: &Args) -> Result<ExitCode> {
+    let world = common.world()?;
+    let topics = [Topic::Poses, Topic::Stats, Topic::Joystick, Topic::Winch, Topic::Boom, Topic::Actuator];
+    let stream = Stream::open(common, args.transport, &topics, 8192, Duration::from_micros(500), None)?;
+    let scene = crate::util::scene_best_effort(common, stream.zenoh(), common.timeout_or(2.0));
+    if scene.is_none() {
+        eprintln!("pivotsim-client: no scene description: bodies named by id, no scene channel");
+    }
+    let file = File::create(&args.file).with_context(|| format!("cannot create {}", args.file.display()))?;
+    let mut w = mcap::Writer::with_options(
+        BufWriter::new(file),
+        mcap::WriteOptions::new().profile("").library(concat!("pivotsim-client ", env!("CARGO_PKG_VERSION"))),
+    )?;
+    let mut meta = BTreeMap::new();
+    meta.insert("world".to_string(), world.to_string());
+    meta.insert("transport".to_string(), format!("{:?}", args.transport).to_lowercase());
+    if let Some(s) = &scene {
+        meta.insert("scene".to_string(), s.scene.clone());
+        meta.insert("timestep".to_string(), s.timestep.to_string());
+    }
+    w.write_metadata(&mcap::records::Metadata { name: "pivotsim".into(), metadata: meta })?;
+    let mut ch = Channels {
+        poses: add_json_channel(
+            &mut w,
+            &world.key(Topic::Poses),
+            "pivotsim.PoseFrame",
+            &tojson::pose_schema(),
+        )?,
+        stats: add_json_channel(
+            &mut w,
+            &world.key(Topic::Stats),
+            "pivotsim.SolverStats",
+            &tojson::stats_schema(),
+        )?,
+        tf: None,
+        inputs: Vec::new(),
+        input_seq: 0,
+    };
+    if !args.no_tf {
+        let topic = format!("{}/{}/tf", msgs::KEY_PREFIX, world);
+        ch.tf = Some(add_json_channel(
+            &mut w,
+            &topic,
+            "foxglove.FrameTransforms",
+            &tojson::frame_transforms_schema(),
+        )?);
+    }
+    if let Some(s) = &scene {
+        let id = add_json_channel(
+            &mut w,
+            &world.key(Topic::Scene),
+            "pivotsim.SceneDescription",
+            &serde_json::json!({"title": "pivotsim.SceneDescription", "type": "object",
+                "description": "the scene description frame of pivotsim-msgs (msgs/README.md)"}),
+        )?;
+        let now = crate::net::now_ns();
+        write(&mut w, id, 0, now, now, &serde_json::to_value(s)?)?;
+    }
+    let end = args.duration.map(|d| Instant::now() + secs(d));
+    let idle = common.timeout.map(secs);
+    let tty = std::io::stderr().is_terminal();
+    let (mut n_poses, mut n_stats, mut n_inputs, mut malformed) = (0u64, 0u64, 0u64, 0u64);
+    let mut last_frame = Instant::now();
+    let mut last_status = Instant::now();
+    let start = Instant::now();
+    let mut outcome = Ok(());
+    eprintln!(
+        "pivotsim-client: recording world `{world}` via {:?} into {} (Ctrl-C stops)",
+        args.transport,
+        args.file.display()
+    );
+    loop {
+        if interrupted()
+            || end.is_some_and(|e| Instant::now() >= e)
+            || args.count.is_some_and(|c| n_poses >= c)
+        {
+            break;
+        }
+        if let Some(idle) = idle
+            && last_frame.elapsed() >= idle
+        {
+            outcome = Err(format!("no frames for {:.1} s", idle.as_secs_f64()));
+            break;
+        }
+        if tty && last_status.elapsed() >= Duration::from_secs(1) {
+            last_status = Instant::now();
+            eprint!(
+                "\r{:6.1} s  poses {n_poses}  stats {n_stats}  inputs {n_inputs}  malformed {malformed}  dropped {}   ",
+                start.elapsed().as_secs_f64(),
+                stream.inbox.dropped()
+            );
+        }
+        let Some(r) = stream.inbox.recv_timeout(Duration::from_millis(50)) else { continue };
+        match r.topic {
+            Some(Topic::Poses) => match msgs::PoseFrameView::parse(&r.bytes) {
+                Ok(v) => {
+                    let seq = v.sequence() as u32;
+                    write(
+                        &mut w,
+                        ch.poses,
+                        seq,
+                        r.recv_ns,
+                        v.wall_time_ns(),
+                        &tojson::pose_json(&v, scene.as_ref(), |_| true),
+                    )?;
+                    if let Some(tf) = ch.tf {
+                        write(
+                            &mut w,
+                            tf,
+                            seq,
+                            r.recv_ns,
+                            v.wall_time_ns(),
+                            &tojson::frame_transforms_json(&v, scene.as_ref()),
+                        )?;
+                    }
+                    n_poses += 1;
+                    last_frame = Instant::now();
+                }
+                Err(_) => malformed += 1,
+            },
+            Some(Topic::Stats) => match msgs::SolverStats::decode(&r.bytes) {
+                Ok(s) => {
+                    write(
+                        &mut w,
+                        ch.stats,
+                        s.sequence as u32,
+                        r.recv_ns,
+                        r.recv_ns,
+                        &tojson::stats_json(&s),
+                    )?;
+                    n_stats += 1;
+                    last_frame = Instant::now();
+                }
+                Err(_) => malformed += 1,
+            },
+            Some(t) if Topic::INPUTS.contains(&t) => match msgs::InputCommand::decode(&r.bytes) {
+                Ok(c) => {
+                    let topic = crate::send::topic_of(&c);
+                    let id = match ch.inputs.iter().find(|(t, _)| *t == topic) {
+                        Some((_, id)) => *id,
+                        None => {
+                            let id = add_json_channel(
+                                &mut w,
+                                &world.key(topic),
+                                tojson::input_schema_name(topic),
+                                &tojson::input_schema(topic),
+                            )?;
+                            ch.inputs.push((topic, id));
+                            id
+                        }
+                    };
+                    write(&mut w, id, ch.input_seq, r.recv_ns, r.recv_ns, &tojson::input_json(&c))?;
+                    ch.input_seq = ch.input_seq.wrapping_add(1);
+                    n_inputs += 1;
+                }
+                Err(_) => malformed += 1,
+            },
+            _ => malformed += 1,
+        }
+    }
+    w.finish()?;
+    let mut inner = w.into_inner();
+    inner.flush()?;
+    if tty {
+        eprintln!();
+    }
+    eprintln!(
+        "pivotsim-client: wrote {}: {n_poses} pose frames, {n_stats} stats, {n_inputs} inputs in {:.1} s ({malformed} malformed skipped, {} dropped)",
+        args.file.display(),
+        start.elapsed().as_secs_f64(),
+        stream.inbox.dropped()
+    );
+    if let Err(e) = outcome {
+        bail!("{e} (the file holds what came before)");
+    }
+    Ok(ExitCode::SUCCESS)
+}

@@ -1,0 +1,352 @@
+//! The client against a real server over real transports on loopback: Zenoh on a free port,
+//! iceoryx2 on a world name of its own, every run bounded in time.
+
+mod common;
+
+use std::time::{Duration, Instant};
+
+use common::{DRUM, Server, field, spawn_client};
+use serde_json::Value;
+
+const LIMIT: Duration = Duration::from_secs(30);
+
+/// The steps `watch --plain` printed: their sequence numbers.
+fn sequences(stdout: &str) -> Vec<u64> {
+    stdout.lines().filter_map(|l| field(l, "seq")).map(|s| s.parse().unwrap()).collect()
+}
+
+/// One `watch --json` step of `server`.
+fn snapshot(server: &Server) -> Value {
+    let out = server.client(&["--timeout", "10", "watch", "--count", "1", "--json"], LIMIT).ok();
+    serde_json::from_str(out.stdout.lines().next().expect("a JSON line")).expect("JSON")
+}
+
+fn body<'a>(snap: &'a Value, name: &str) -> &'a Value {
+    snap["bodies"].as_array().unwrap().iter().find(|b| b["name"] == name).unwrap_or_else(|| panic!("{name}"))
+}
+
+fn quat(b: &Value) -> [f64; 4] {
+    let q = &b["orientation"];
+    ["x", "y", "z", "w"].map(|k| q[k].as_f64().unwrap())
+}
+
+/// Rotation angle between two unit quaternions (rad).
+fn angle(a: [f64; 4], b: [f64; 4]) -> f64 {
+    let d: f64 = a.iter().zip(b).map(|(x, y)| x * y).sum();
+    2.0 * d.abs().min(1.0).acos()
+}
+
+/// The `sequence N` of a `control` reply.
+fn reply_sequence(stdout: &str) -> u64 {
+    let mut w = stdout.split_whitespace();
+    while let Some(x) = w.next() {
+        if x == "sequence" {
+            return w.next().unwrap().parse().unwrap();
+        }
+    }
+    panic!("no sequence in {stdout:?}");
+}
+
+#[test]
+fn watch_count_5_sees_5_steps_in_order_over_both_transports() {
+    let s = Server::start("pendulum", "watch");
+    for transport in ["zenoh", "iceoryx2"] {
+        let out =
+            s.client(&["--timeout", "10", "watch", "--count", "5", "--transport", transport], LIMIT).ok();
+        let seq = sequences(&out.stdout);
+        assert_eq!(seq.len(), 5, "{transport}: {}", out.stdout);
+        assert!(seq.windows(2).all(|w| w[1] > w[0]), "{transport}: not increasing: {seq:?}");
+        // Body names come from the scene queryable.
+        assert!(out.stdout.contains("upper=("), "{}", out.stdout);
+        assert!(out.stderr.contains("0 malformed"), "{}", out.stderr);
+    }
+}
+
+#[test]
+fn scene_answers_with_the_bodies() {
+    let s = Server::start(DRUM, "scene");
+    let out = s.client(&["scene"], LIMIT).ok();
+    assert!(out.stdout.contains("scene client_drum"), "{}", out.stdout);
+    for name in ["drum", "slider", "axle", "rail", "winch", "slide"] {
+        assert!(out.stdout.contains(name), "{name} missing:\n{}", out.stdout);
+    }
+    let out = s.client(&["scene", "--json"], LIMIT).ok();
+    let d: pivotsim_msgs::SceneDescription = serde_json::from_str(&out.stdout).expect("scene JSON");
+    let names: Vec<&str> = d.bodies.iter().map(|b| b.name.as_str()).collect();
+    assert_eq!(names, ["drum", "slider"]);
+    assert_eq!(d.world, s.world);
+    assert_eq!(d.actuators.len(), 2);
+}
+
+#[test]
+fn control_pause_then_step_3_advances_exactly_3() {
+    let s = Server::start("pendulum", "control");
+    let paused = s.client(&["control", "pause"], LIMIT).ok();
+    assert!(paused.stdout.contains("paused"), "{}", paused.stdout);
+    let s0 = reply_sequence(&paused.stdout);
+    let stepped = s.client(&["control", "step", "3"], LIMIT).ok();
+    assert_eq!(reply_sequence(&stepped.stdout), s0 + 3, "{}", stepped.stdout);
+    // The stepped state is published: a watcher started now sees nothing newer while paused.
+    let resumed = s.client(&["control", "resume"], LIMIT).ok();
+    assert!(resumed.stdout.contains("running"), "{}", resumed.stdout);
+    // Typed errors exit non-zero.
+    let busy = s.client(&["control", "step", "1"], LIMIT);
+    assert_eq!(busy.code, Some(2), "{busy:?}");
+    assert!(busy.stderr.contains("error (busy)"), "{}", busy.stderr);
+    let unknown = s.client(&["control", "load", "no_such_scene"], LIMIT);
+    assert_eq!(unknown.code, Some(2), "{unknown:?}");
+    assert!(unknown.stderr.contains("unknown_scene"), "{}", unknown.stderr);
+    let variant = s.client(&["control", "--json", "variant", "pgs"], LIMIT).ok();
+    let reply: Value = serde_json::from_str(variant.stdout.trim()).unwrap();
+    assert_eq!(reply["outcome"]["ok"]["variant"], "pgs");
+    let bad = s.client(&["control", "variant", "fastest"], LIMIT);
+    assert_ne!(bad.code, Some(0));
+}
+
+#[test]
+fn send_winch_and_actuator_move_the_joints() {
+    let s = Server::start(DRUM, "send");
+    let before = snapshot(&s);
+    let q0 = quat(body(&before, "drum"));
+    assert_eq!(body(&before, "slider")["position"]["x"], 3.0);
+
+    // Winch over Zenoh, held for 0.4 s at 1 rad/s, then the deadman holds the drum.
+    let out = s.client(&["send", "--hold", "0.4", "winch", "winch", "1.0"], LIMIT).ok();
+    assert!(out.stdout.contains("accepted") && !out.stdout.contains("rejected"), "{}", out.stdout);
+    // Position actuator over iceoryx2: one frame, the slider goes to x = 3 + 0.5.
+    let out = s
+        .client(&["send", "--transport", "iceoryx2", "actuator", "slide", "0.5", "--mode", "position"], LIMIT)
+        .ok();
+    assert!(out.stdout.contains("1 accepted"), "{}", out.stdout);
+    std::thread::sleep(Duration::from_millis(600));
+    let after = snapshot(&s);
+    let turned = angle(q0, quat(body(&after, "drum")));
+    assert!(turned > 0.3, "the drum turned {turned} rad");
+    let x = body(&after, "slider")["position"]["x"].as_f64().unwrap();
+    assert!((x - 3.5).abs() < 0.02, "slider at x = {x}");
+    // Held by the deadman (velocity motor at 0): the drum does not keep turning.
+    let later = snapshot(&s);
+    let drift = angle(quat(body(&after, "drum")), quat(body(&later, "drum")));
+    assert!(drift < 0.01, "the drum drifted {drift} rad after the deadman");
+
+    // Refused before sending: an actuator the scene lacks; sent anyway with --force, the server
+    // rejects it and the client exits 2.
+    let out = s.client(&["send", "actuator", "nope", "1"], LIMIT);
+    assert_ne!(out.code, Some(0));
+    assert!(out.stderr.contains("unknown actuator"), "{}", out.stderr);
+    let out = s.client(&["send", "--force", "winch", "slide", "1"], LIMIT);
+    assert_eq!(out.code, Some(2), "{out:?}");
+    assert!(out.stdout.contains("unknown-actuator"), "{}", out.stdout);
+}
+
+#[test]
+fn drive_with_constant_axes_turns_the_drum() {
+    let s = Server::start(DRUM, "drive");
+    let q0 = quat(body(&snapshot(&s), "drum"));
+    for transport in ["zenoh", "iceoryx2"] {
+        let out = s
+            .client(
+                &["drive", "--transport", transport, "--axes", "0.5", "--duration", "0.3", "--rate", "40"],
+                LIMIT,
+            )
+            .ok();
+        let line =
+            out.stdout.lines().find(|l| l.starts_with("sent ")).unwrap_or_else(|| panic!("{}", out.stdout));
+        let sent: u64 = line.split_whitespace().nth(1).unwrap().parse().unwrap();
+        assert!((8..=14).contains(&sent), "{transport}: {}", out.stdout);
+    }
+    std::thread::sleep(Duration::from_millis(400));
+    let turned = angle(q0, quat(body(&snapshot(&s), "drum")));
+    assert!(turned > 0.4, "the drum turned {turned} rad");
+}
+
+fn ping(s: &Server, transport: &str) {
+    let out = s.client(&["ping", "--count", "200", "--transport", transport], LIMIT).ok();
+    let line =
+        out.stdout.lines().find(|l| l.starts_with("latency µs:")).unwrap_or_else(|| panic!("{}", out.stdout));
+    let value = |k: &str| -> f64 {
+        let mut w = line.split_whitespace();
+        while let Some(x) = w.next() {
+            if x == k {
+                return w.next().unwrap().parse().unwrap();
+            }
+        }
+        panic!("{k} missing in {line}");
+    };
+    let (p50, p90, p99, max) = (value("p50"), value("p90"), value("p99"), value("max"));
+    assert!(p50 > 0.0 && p50 <= p90 && p90 <= p99 && p99 <= max, "{line}");
+    assert!(p50 < 100_000.0, "{transport}: p50 {p50} µs on loopback");
+    assert!(out.stdout.contains("200 pose frames"), "{}", out.stdout);
+    assert!(out.stdout.contains(" | #"), "no histogram:\n{}", out.stdout);
+    eprintln!("{transport}: {line}");
+}
+
+#[test]
+fn ping_200_over_zenoh() {
+    let s = Server::start("pendulum", "pingz");
+    ping(&s, "zenoh");
+}
+
+#[test]
+fn ping_200_over_iceoryx2() {
+    let s = Server::start("pendulum", "pingi");
+    ping(&s, "iceoryx2");
+}
+
+/// Every message of every channel of an MCAP file: topic → (schema name, JSON messages).
+fn read_mcap(path: &std::path::Path) -> std::collections::BTreeMap<String, (String, Vec<Value>)> {
+    let bytes = std::fs::read(path).unwrap();
+    let mut out = std::collections::BTreeMap::new();
+    for m in mcap::MessageStream::new(&bytes).unwrap() {
+        let m = m.unwrap();
+        assert_eq!(m.channel.message_encoding, "json");
+        let schema = m.channel.schema.as_ref().expect("schema");
+        assert_eq!(schema.encoding, "jsonschema");
+        serde_json::from_slice::<Value>(&schema.data).expect("schema is JSON");
+        let e = out.entry(m.channel.topic.clone()).or_insert_with(|| (schema.name.clone(), Vec::new()));
+        e.1.push(serde_json::from_slice(&m.data).expect("message is JSON"));
+    }
+    let summary = mcap::Summary::read(&bytes).unwrap().expect("summary");
+    assert!(summary.stats.is_some());
+    out
+}
+
+fn send_all_four(args: &[String]) {
+    for cmd in [
+        &["winch", "winch", "0.5"][..],
+        &["actuator", "slide", "0.2", "--mode", "position"],
+        &["boom", "winch=0.25", "slide=0.1"],
+        &["joystick", "--axes", "0.1"],
+    ] {
+        let mut a = args.to_vec();
+        a.extend(cmd.iter().map(|s| s.to_string()));
+        common::run_client(&a, LIMIT).ok();
+    }
+}
+
+fn check_recording(path: &std::path::Path, world: &str) {
+    let m = read_mcap(path);
+    let topic = |t: &str| format!("pivotsim/{world}/{t}");
+    for (t, schema) in [
+        ("poses", "pivotsim.PoseFrame"),
+        ("stats", "pivotsim.SolverStats"),
+        ("tf", "foxglove.FrameTransforms"),
+        ("scene", "pivotsim.SceneDescription"),
+        ("cmd/winch", "pivotsim.WinchCommand"),
+        ("cmd/actuator", "pivotsim.ActuatorCommand"),
+        ("cmd/boom", "pivotsim.BoomCommand"),
+        ("cmd/joystick", "pivotsim.Joystick"),
+    ] {
+        let (name, msgs) = m.get(&topic(t)).unwrap_or_else(|| panic!("no channel {t}: {:?}", m.keys()));
+        assert_eq!(name, schema);
+        assert!(!msgs.is_empty(), "no message on {t}");
+    }
+    let poses = &m[&topic("poses")].1;
+    assert!(poses.len() >= 10, "{} pose messages", poses.len());
+    assert!(poses.windows(2).all(|w| w[1]["sequence"].as_u64() > w[0]["sequence"].as_u64()));
+    assert_eq!(poses[0]["bodies"][0]["name"], "drum");
+    assert_eq!(m[&topic("tf")].1[0]["transforms"][1]["child_frame_id"], "slider");
+    assert_eq!(m[&topic("cmd/winch")].1[0]["drum_speed"], 0.5);
+    assert_eq!(m[&topic("scene")].1[0]["scene"], "client_drum");
+}
+
+#[test]
+fn record_over_iceoryx2_writes_every_channel() {
+    let s = Server::start(DRUM, "reci");
+    let dir = std::env::temp_dir().join(format!("pivotsim-client-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("iox.mcap");
+    let mut a = s.args();
+    a.extend(
+        ["record", path.to_str().unwrap(), "--transport", "iceoryx2", "--duration", "20"].map(String::from),
+    );
+    let rec = spawn_client(&a, LIMIT);
+    rec.wait_for_stderr("recording world", LIMIT);
+    let mut a = s.args();
+    a.extend(["send", "--transport", "iceoryx2"].map(String::from));
+    let t = Instant::now();
+    send_all_four(&a);
+    eprintln!("four sends over iceoryx2 took {:?}", t.elapsed());
+    // Ctrl-C ends the recording; the file is finished properly.
+    rec.interrupt();
+    let out = rec.wait().ok();
+    assert!(out.stderr.contains("4 inputs"), "{}", out.stderr);
+    check_recording(&path, &s.world);
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn record_over_zenoh_sees_inputs_of_peers_connected_to_it() {
+    let s = Server::start(DRUM, "recz");
+    let dir = std::env::temp_dir().join(format!("pivotsim-client-z-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("zenoh.mcap");
+    let rec_endpoint = format!("tcp/127.0.0.1:{}", common::free_port());
+    let mut a = s.args();
+    a.extend(
+        ["--listen", &rec_endpoint, "record", path.to_str().unwrap(), "--duration", "20"].map(String::from),
+    );
+    let rec = spawn_client(&a, LIMIT);
+    rec.wait_for_stderr("recording world", LIMIT);
+    let mut a = s.args();
+    a.extend(["--connect", &rec_endpoint, "send"].map(String::from));
+    send_all_four(&a);
+    rec.interrupt();
+    let out = rec.wait().ok();
+    check_recording(&path, &s.world);
+    assert!(out.stderr.contains("0 malformed"), "{}", out.stderr);
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn malformed_frames_are_counted_and_skipped() {
+    use zenoh::Wait;
+    let s = Server::start("pendulum", "bad");
+    // The watcher listens; a test peer connects to it and publishes garbage on the poses and
+    // stats keys between the server's frames.
+    let listen = format!("tcp/127.0.0.1:{}", common::free_port());
+    let mut a = s.args();
+    a.extend(
+        ["--listen", &listen, "--timeout", "10", "watch", "--plain", "--count", "120"].map(String::from),
+    );
+    let watch = spawn_client(&a, LIMIT);
+    let mut c = zenoh::Config::default();
+    c.insert_json5("mode", "\"peer\"").unwrap();
+    c.insert_json5("connect/endpoints", &format!("[\"{listen}\"]")).unwrap();
+    c.insert_json5("listen/endpoints", "[]").unwrap();
+    c.insert_json5("scouting/multicast/enabled", "false").unwrap();
+    let deadline = Instant::now() + Duration::from_secs(10);
+    let session = loop {
+        // The watcher needs a moment to listen.
+        std::thread::sleep(Duration::from_millis(200));
+        let z = zenoh::open(c.clone()).wait().unwrap();
+        if z.info().peers_zid().wait().count() > 0 {
+            break z;
+        }
+        assert!(Instant::now() < deadline, "cannot reach the watcher");
+    };
+    let poses = format!("pivotsim/{}/poses", s.world);
+    let stats = format!("pivotsim/{}/stats", s.world);
+    let mut valid_but_wrong = Vec::new();
+    pivotsim_msgs::ControlRequest { id: 1, command: pivotsim_msgs::ControlCommand::Pause }
+        .encode(&mut valid_but_wrong)
+        .unwrap();
+    for i in 0..10u8 {
+        session.put(&poses, vec![i; 7]).wait().unwrap();
+        session.put(&stats, b"PVSM\x01\x00\x02\x00\xff\xff\xff\xff\x00\x00\x00\x00".to_vec()).wait().unwrap();
+        session.put(&poses, valid_but_wrong.clone()).wait().unwrap();
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    let out = watch.wait().ok();
+    let seq = sequences(&out.stdout);
+    assert_eq!(seq.len(), 120);
+    let malformed: u64 = out
+        .stderr
+        .split(", ")
+        .find_map(|p| p.strip_suffix(" malformed (skipped)"))
+        .unwrap_or_else(|| panic!("{}", out.stderr))
+        .parse()
+        .unwrap();
+    assert!(malformed >= 25, "{malformed} malformed counted of 30 sent:\n{}", out.stderr);
+    drop(session);
+}
