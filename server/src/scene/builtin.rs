@@ -29,6 +29,7 @@ pub const BUILTIN: &[BuiltinScene] = &[
     scene!("hanging_chain", "a chain of 20 capsules on ball joints, released sideways"),
     scene!("forwarder", "a 16-link 1,900 kg forwarder crane grasps a 400 kg log, lifts it and slews"),
     scene!("winch", "a 400 kg drum winds a chain of 50 × 1 kg capsules dragged along the ground"),
+    scene!("forklift", "a 3 t forklift lifts a crate on a pallet and turns 360° around a cone"),
 ];
 
 /// The built-in scene `name`.
