@@ -1,0 +1,622 @@
+//! pivotsim frames → ROS messages, and `sensor_msgs/Joy` → a pivotsim joystick frame. Pure
+//! functions and small state (no DDS, no Zenoh): unit-tested here, used by the bridge loop.
+
+use std::collections::HashMap;
+
+use pivotsim_msgs as msgs;
+
+use crate::ros_msgs::*;
+
+/// Which clock stamps `/tf`, `/pivotsim/poses` and the diagnostics.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum StampSource {
+    /// Simulation time (as on `/clock`; ROS nodes run with `use_sim_time:=true`).
+    #[default]
+    Sim,
+    /// The server's wall clock at the end of the step (the pose frame's `wall_time_ns`).
+    Wall,
+}
+
+impl StampSource {
+    /// The stamp of a pose frame.
+    pub fn stamp(self, sim_time: f64, wall_time_ns: u64) -> Time {
+        match self {
+            StampSource::Sim => Time::from_secs_f64(sim_time),
+            StampSource::Wall => Time::from_nanos(wall_time_ns.min(i64::MAX as u64) as i64),
+        }
+    }
+}
+
+/// What the bridge knows of the served scene: body names and kinds by id, and its markers.
+#[derive(Debug, Clone)]
+pub struct SceneInfo {
+    /// The description as received.
+    pub description: msgs::SceneDescription,
+    names: HashMap<u32, usize>,
+}
+
+impl SceneInfo {
+    /// Indexes a description.
+    pub fn new(description: msgs::SceneDescription) -> SceneInfo {
+        let names = description.bodies.iter().enumerate().map(|(i, b)| (b.id, i)).collect();
+        SceneInfo { description, names }
+    }
+
+    /// The body with this id.
+    pub fn body(&self, id: u32) -> Option<&msgs::BodyInfo> {
+        self.names.get(&id).map(|&i| &self.description.bodies[i])
+    }
+
+    /// Whether a pose frame's bodies are exactly this scene's (same ids, same count).
+    pub fn matches(&self, frame: &msgs::PoseFrame) -> bool {
+        frame.bodies.len() == self.description.bodies.len()
+            && frame.bodies.iter().all(|b| self.names.contains_key(&b.id))
+    }
+}
+
+/// Whether a body of a pose frame is static (by its flags or the scene's kind).
+pub fn is_static(scene: &SceneInfo, body: &msgs::BodyPose) -> bool {
+    body.flags & msgs::BODY_STATIC != 0
+        || scene.body(body.id).is_some_and(|b| b.kind == msgs::BodyKind::Static)
+}
+
+fn transform(parent: &str, child: &str, stamp: Time, b: &msgs::BodyPose) -> TransformStamped {
+    TransformStamped {
+        header: Header { stamp, frame_id: parent.to_string() },
+        child_frame_id: child.to_string(),
+        transform: Transform {
+            translation: Vector3 { x: b.position[0], y: b.position[1], z: b.position[2] },
+            rotation: Quaternion::from_array(b.orientation),
+        },
+    }
+}
+
+/// The `/tf` message (moving bodies) and the `/tf_static` one (static bodies) of a pose frame:
+/// one transform per body, `world_frame` → body name. Bodies unknown to the scene are skipped.
+pub fn transforms(
+    scene: &SceneInfo,
+    frame: &msgs::PoseFrame,
+    stamp: Time,
+    world_frame: &str,
+) -> (TFMessage, TFMessage) {
+    let (mut moving, mut fixed) = (TFMessage::default(), TFMessage::default());
+    for b in &frame.bodies {
+        let Some(info) = scene.body(b.id) else { continue };
+        let t = transform(world_frame, &info.name, stamp, b);
+        if is_static(scene, b) { fixed.transforms.push(t) } else { moving.transforms.push(t) }
+    }
+    (moving, fixed)
+}
+
+/// `/pivotsim/poses`: every body's pose in the pose frame's order, in `world_frame`.
+pub fn pose_array(frame: &msgs::PoseFrame, stamp: Time, world_frame: &str) -> PoseArray {
+    PoseArray {
+        header: Header { stamp, frame_id: world_frame.to_string() },
+        poses: frame
+            .bodies
+            .iter()
+            .map(|b| Pose {
+                position: Point::from_array(b.position),
+                orientation: Quaternion::from_array(b.orientation),
+            })
+            .collect(),
+    }
+}
+
+fn color(kind: msgs::BodyKind) -> ColorRGBA {
+    match kind {
+        msgs::BodyKind::Static => ColorRGBA { r: 0.55, g: 0.55, b: 0.55, a: 1.0 },
+        msgs::BodyKind::Dynamic => ColorRGBA { r: 0.95, g: 0.55, b: 0.1, a: 1.0 },
+        msgs::BodyKind::Kinematic => ColorRGBA { r: 0.2, g: 0.5, b: 0.95, a: 1.0 },
+    }
+}
+
+/// Rotates `v` by the unit quaternion `q = [x, y, z, w]`.
+fn rotate(q: [f64; 4], v: [f64; 3]) -> [f64; 3] {
+    let (u, w) = ([q[0], q[1], q[2]], q[3]);
+    let cross = |a: [f64; 3], b: [f64; 3]| {
+        [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
+    };
+    let t = cross(u, v).map(|c| 2.0 * c);
+    let ut = cross(u, t);
+    [v[0] + w * t[0] + ut[0], v[1] + w * t[1] + ut[1], v[2] + w * t[2] + ut[2]]
+}
+
+/// Convex hulls with at most this many vertices are drawn as triangles (the faces are found by
+/// brute force, O(n⁴)); larger ones as a sphere list of their vertices.
+pub const HULL_TRIANGULATE_MAX: usize = 48;
+
+/// Heightfields are drawn with at most this many samples along each side (strided).
+pub const HEIGHTFIELD_MAX_SIDE: usize = 129;
+
+fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+}
+
+fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+
+/// Outward triangles of the convex hull of `v` (brute force; coplanar faces may overlap, which
+/// draws the same surface).
+pub fn hull_triangles(v: &[[f64; 3]]) -> Vec<[usize; 3]> {
+    let size = v.iter().flatten().fold(0.0f64, |m, x| m.max(x.abs())).max(1e-9);
+    let eps = 1e-9 * size * size * size;
+    let mut out = Vec::new();
+    for i in 0..v.len() {
+        for j in i + 1..v.len() {
+            for k in j + 1..v.len() {
+                let (e1, e2) = (sub(v[j], v[i]), sub(v[k], v[i]));
+                let n = [
+                    e1[1] * e2[2] - e1[2] * e2[1],
+                    e1[2] * e2[0] - e1[0] * e2[2],
+                    e1[0] * e2[1] - e1[1] * e2[0],
+                ];
+                if dot(n, n).sqrt() <= eps / size {
+                    continue;
+                }
+                let (mut above, mut below) = (false, false);
+                for p in v {
+                    let d = dot(n, sub(*p, v[i]));
+                    above |= d > eps;
+                    below |= d < -eps;
+                    if above && below {
+                        break;
+                    }
+                }
+                if !above {
+                    out.push([i, j, k]);
+                } else if !below {
+                    out.push([i, k, j]);
+                }
+            }
+        }
+    }
+    out
+}
+
+fn marker(body: &msgs::BodyInfo, id: i32, type_: i32, position: [f64; 3], orientation: [f64; 4]) -> Marker {
+    Marker {
+        header: Header { stamp: Time::default(), frame_id: body.name.clone() },
+        ns: body.name.clone(),
+        id,
+        type_,
+        action: Marker::ADD,
+        pose: Pose {
+            position: Point::from_array(position),
+            orientation: Quaternion::from_array(orientation),
+        },
+        scale: Vector3 { x: 1.0, y: 1.0, z: 1.0 },
+        color: color(body.kind),
+        frame_locked: true,
+        ..Marker::default()
+    }
+}
+
+fn triangles(points: &mut Vec<Point>, v: &[[f64; 3]], tris: impl Iterator<Item = [usize; 3]>) {
+    for t in tris {
+        if t.iter().all(|&i| i < v.len()) {
+            points.extend(t.iter().map(|&i| Point::from_array(v[i])));
+        }
+    }
+}
+
+/// The markers of one body: one or more per collider, in the body's frame (`frame_id` = body
+/// name, `ns` = body name, id = 4 · collider index + part, frame-locked, stamp 0 = latest
+/// transform). Shapes given by reference: meshes as `MESH_RESOURCE` with the reference as URI,
+/// heightfields not drawn.
+pub fn body_markers(body: &msgs::BodyInfo, out: &mut Vec<Marker>) {
+    for (ci, c) in body.colliders.iter().enumerate() {
+        let id = 4 * ci as i32;
+        let (p, q) = (c.position, c.orientation);
+        match &c.shape {
+            msgs::Shape::Ball { radius } => {
+                let mut m = marker(body, id, Marker::SPHERE, p, q);
+                m.scale = Vector3 { x: 2.0 * radius, y: 2.0 * radius, z: 2.0 * radius };
+                out.push(m);
+            }
+            msgs::Shape::Box { half_extents: h } => {
+                let mut m = marker(body, id, Marker::CUBE, p, q);
+                m.scale = Vector3 { x: 2.0 * h[0], y: 2.0 * h[1], z: 2.0 * h[2] };
+                out.push(m);
+            }
+            msgs::Shape::Cylinder { radius, half_height } | msgs::Shape::Capsule { radius, half_height } => {
+                let mut m = marker(body, id, Marker::CYLINDER, p, q);
+                m.scale = Vector3 { x: 2.0 * radius, y: 2.0 * radius, z: 2.0 * half_height };
+                out.push(m);
+                if matches!(c.shape, msgs::Shape::Capsule { .. }) {
+                    for (part, s) in [(1, 1.0), (2, -1.0)] {
+                        let off = rotate(q, [0.0, 0.0, s * half_height]);
+                        let centre = [p[0] + off[0], p[1] + off[1], p[2] + off[2]];
+                        let mut m = marker(body, id + part, Marker::SPHERE, centre, q);
+                        m.scale = Vector3 { x: 2.0 * radius, y: 2.0 * radius, z: 2.0 * radius };
+                        out.push(m);
+                    }
+                }
+            }
+            msgs::Shape::ConvexHull { vertices } => {
+                if vertices.len() <= HULL_TRIANGULATE_MAX {
+                    let mut m = marker(body, id, Marker::TRIANGLE_LIST, p, q);
+                    triangles(&mut m.points, vertices, hull_triangles(vertices).into_iter());
+                    out.push(m);
+                } else {
+                    let mut m = marker(body, id, Marker::SPHERE_LIST, p, q);
+                    m.scale = Vector3 { x: 0.02, y: 0.02, z: 0.02 };
+                    m.points = vertices.iter().map(|v| Point::from_array(*v)).collect();
+                    out.push(m);
+                }
+            }
+            msgs::Shape::Heightfield { rows, cols, extent, heights: msgs::HeightData::Inline(h) } => {
+                let (rows, cols) = (*rows as usize, *cols as usize);
+                if rows < 2 || cols < 2 || h.len() != rows * cols {
+                    continue;
+                }
+                let step = |n: usize| (n - 1).div_ceil(HEIGHTFIELD_MAX_SIDE - 1).max(1);
+                let idx = |n: usize, s: usize| {
+                    let mut v: Vec<usize> = (0..n).step_by(s).collect();
+                    if *v.last().unwrap_or(&0) != n - 1 {
+                        v.push(n - 1);
+                    }
+                    v
+                };
+                let (rs, cs) = (idx(rows, step(rows)), idx(cols, step(cols)));
+                let at = |r: usize, c: usize| {
+                    [
+                        -extent[0] / 2.0 + c as f64 * extent[0] / (cols - 1) as f64,
+                        -extent[1] / 2.0 + r as f64 * extent[1] / (rows - 1) as f64,
+                        h[r * cols + c],
+                    ]
+                };
+                let mut m = marker(body, id, Marker::TRIANGLE_LIST, p, q);
+                for w in rs.windows(2) {
+                    for u in cs.windows(2) {
+                        let (a, b, c, d) = (at(w[0], u[0]), at(w[0], u[1]), at(w[1], u[1]), at(w[1], u[0]));
+                        for v in [a, b, c, a, c, d] {
+                            m.points.push(Point::from_array(v));
+                        }
+                    }
+                }
+                out.push(m);
+            }
+            msgs::Shape::Heightfield { heights: msgs::HeightData::Reference(_), .. } => {}
+            msgs::Shape::Trimesh { mesh: msgs::MeshData::Inline { vertices, triangles: tris } } => {
+                let mut m = marker(body, id, Marker::TRIANGLE_LIST, p, q);
+                triangles(&mut m.points, vertices, tris.iter().map(|t| t.map(|i| i as usize)));
+                out.push(m);
+            }
+            msgs::Shape::Trimesh { mesh: msgs::MeshData::Reference(uri) } => {
+                let mut m = marker(body, id, Marker::MESH_RESOURCE, p, q);
+                m.mesh_resource = uri.clone();
+                out.push(m);
+            }
+        }
+    }
+}
+
+/// `/pivotsim/markers`: a `DELETEALL` (when `clear`: the scene changed) followed by every body's
+/// markers.
+pub fn scene_markers(scene: &SceneInfo, clear: bool) -> MarkerArray {
+    let mut markers = Vec::new();
+    if clear {
+        markers.push(Marker { action: Marker::DELETEALL, ..Marker::default() });
+    }
+    for b in &scene.description.bodies {
+        body_markers(b, &mut markers);
+    }
+    MarkerArray { markers }
+}
+
+/// Counters of the `/joy` path (bridge side), reported in the bridge's diagnostics and logs.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct JoyCounters {
+    /// Joy messages received from ROS.
+    pub received: u64,
+    /// Forwarded to the server as joystick frames.
+    pub forwarded: u64,
+    /// Rejected by the bridge, indexed by [`msgs::RejectReason::code`].
+    pub rejected: [u64; msgs::REJECT_REASONS],
+    /// Forwarded frames whose Zenoh put failed.
+    pub put_failed: u64,
+}
+
+impl JoyCounters {
+    /// All bridge-side rejections.
+    pub fn rejected_total(&self) -> u64 {
+        self.rejected.iter().sum()
+    }
+
+    /// Rejections for `reason`.
+    pub fn rejected_for(&self, reason: msgs::RejectReason) -> u64 {
+        self.rejected[reason.code() as usize]
+    }
+}
+
+/// Turns `sensor_msgs/Joy` messages into joystick frames of one source: a fresh sequence number
+/// per accepted message, the same validation as the server's (counts, finite, axes in [−1, 1],
+/// buttons 0 or 1), rejections counted by reason.
+#[derive(Debug, Clone)]
+pub struct JoyTranslator {
+    source_id: u32,
+    sequence: u64,
+    /// Counters so far.
+    pub counters: JoyCounters,
+}
+
+impl JoyTranslator {
+    /// A translator for frames of `source_id`.
+    pub fn new(source_id: u32) -> JoyTranslator {
+        JoyTranslator { source_id, sequence: 0, counters: JoyCounters::default() }
+    }
+
+    /// The source id of the frames.
+    pub fn source_id(&self) -> u32 {
+        self.source_id
+    }
+
+    /// Validates `joy` and encodes it as a joystick frame into `buf`, or counts and returns the
+    /// reason it was rejected (`buf` is then empty).
+    pub fn translate(&mut self, joy: &Joy, buf: &mut Vec<u8>) -> Result<(), msgs::RejectReason> {
+        self.counters.received += 1;
+        buf.clear();
+        match self.frame(joy, buf) {
+            Ok(()) => {
+                self.counters.forwarded += 1;
+                Ok(())
+            }
+            Err(reason) => {
+                buf.clear();
+                let c = &mut self.counters.rejected[reason.code() as usize];
+                *c = c.saturating_add(1);
+                Err(reason)
+            }
+        }
+    }
+
+    fn frame(&mut self, joy: &Joy, buf: &mut Vec<u8>) -> Result<(), msgs::RejectReason> {
+        if joy.axes.len() > msgs::MAX_AXES || joy.buttons.len() > msgs::MAX_BUTTONS {
+            return Err(msgs::RejectReason::Oversize);
+        }
+        if joy.axes.iter().any(|a| !a.is_finite()) {
+            return Err(msgs::RejectReason::NonFinite);
+        }
+        if joy.axes.iter().any(|a| !(-1.0..=1.0).contains(a)) || joy.buttons.iter().any(|&b| b != 0 && b != 1)
+        {
+            return Err(msgs::RejectReason::OutOfRange);
+        }
+        let buttons = joy.buttons.iter().enumerate().fold(0u64, |m, (i, &b)| m | (u64::from(b == 1) << i));
+        let j = msgs::Joystick::new(
+            self.sequence + 1,
+            self.source_id,
+            &joy.axes,
+            buttons,
+            joy.buttons.len() as u8,
+        )
+        .ok_or(msgs::RejectReason::Oversize)?;
+        msgs::InputCommand::Joystick(j).encode(buf).map_err(|e| e.reject_reason())?;
+        self.sequence += 1;
+        Ok(())
+    }
+}
+
+fn kv(key: impl Into<String>, value: impl ToString) -> KeyValue {
+    KeyValue { key: key.into(), value: value.to_string() }
+}
+
+/// Name of the solver status in `/pivotsim/stats`.
+pub const DIAG_SOLVER: &str = "pivotsim: solver";
+/// Name of the server's input status in `/pivotsim/stats`.
+pub const DIAG_INPUTS: &str = "pivotsim: inputs";
+/// Name of the bridge's own status in `/pivotsim/stats`.
+pub const DIAG_BRIDGE: &str = "pivotsim-ros2-bridge";
+
+/// What the bridge reports about itself.
+#[derive(Debug, Clone, Default)]
+pub struct BridgeHealth {
+    /// World name.
+    pub world: String,
+    /// Scene name, once described.
+    pub scene: Option<String>,
+    /// Pose frames received over Zenoh.
+    pub pose_frames: u64,
+    /// Pose frames replaced before the ROS side took them (latest wins).
+    pub pose_frames_skipped: u64,
+    /// Seconds since the last frame from the server (`None`: none yet).
+    pub server_silent_s: Option<f64>,
+    /// ROS publishes that failed (would block, I/O).
+    pub ros_publish_failed: u64,
+    /// `/joy` counters.
+    pub joy: JoyCounters,
+    /// Joystick source id of the bridge.
+    pub source_id: u32,
+}
+
+/// `/pivotsim/stats`: the server's solver and input statistics (from its latest stats frame, if
+/// any) and the bridge's own counters.
+pub fn diagnostics(stats: Option<&msgs::SolverStats>, bridge: &BridgeHealth, stamp: Time) -> DiagnosticArray {
+    let mut status = Vec::new();
+    let hw = format!("pivotsim/{}", bridge.world);
+    if let Some(s) = stats {
+        let t = &s.totals;
+        status.push(DiagnosticStatus {
+            level: DiagnosticStatus::OK,
+            name: DIAG_SOLVER.into(),
+            message: format!("step {} at t = {:.3} s, {} islands", s.sequence, s.sim_time, s.islands.len()),
+            hardware_id: hw.clone(),
+            values: vec![
+                kv("sequence", s.sequence),
+                kv("sim_time_s", s.sim_time),
+                kv("step_wall_us", s.step_wall_us),
+                kv("overruns", s.overruns),
+                kv("islands", s.islands.len()),
+                kv("rows", t.rows),
+                kv("bodies", t.bodies),
+                kv("tight", t.tight),
+                kv("fallback_islands", t.fallback_islands),
+                kv("pivot_steps", t.pivot_steps),
+                kv("solve_us", t.solve_us),
+                kv("max_residual_rel", t.residual_rel_max),
+            ],
+        });
+        let h = &s.inputs;
+        let mut values = vec![kv("accepted", h.accepted), kv("rejected", h.rejected_total())];
+        for r in msgs::RejectReason::ALL {
+            values.push(kv(format!("rejected.{}", r.name()), h.rejected_for(*r)));
+        }
+        values.push(kv("deadman_trips", h.deadman_trips));
+        values.push(kv("deadman_active", h.deadman_active));
+        status.push(DiagnosticStatus {
+            level: DiagnosticStatus::OK,
+            name: DIAG_INPUTS.into(),
+            message: if h.deadman_active {
+                "deadman: actuators at neutral".into()
+            } else {
+                "operator input live".into()
+            },
+            hardware_id: hw.clone(),
+            values,
+        });
+    }
+    let j = &bridge.joy;
+    let stale = bridge.server_silent_s.is_none_or(|s| s > 1.0);
+    let mut values = vec![
+        kv("world", &bridge.world),
+        kv("scene", bridge.scene.as_deref().unwrap_or("")),
+        kv(
+            "server_silent_s",
+            bridge.server_silent_s.map_or("never heard".to_string(), |s| format!("{s:.3}")),
+        ),
+        kv("pose_frames", bridge.pose_frames),
+        kv("pose_frames_skipped", bridge.pose_frames_skipped),
+        kv("ros_publish_failed", bridge.ros_publish_failed),
+        kv("joy_source_id", bridge.source_id),
+        kv("joy_received", j.received),
+        kv("joy_forwarded", j.forwarded),
+        kv("joy_put_failed", j.put_failed),
+        kv("joy_rejected", j.rejected_total()),
+    ];
+    for r in msgs::RejectReason::ALL {
+        values.push(kv(format!("joy_rejected.{}", r.name()), j.rejected_for(*r)));
+    }
+    status.push(DiagnosticStatus {
+        level: if stale { DiagnosticStatus::STALE } else { DiagnosticStatus::OK },
+        name: DIAG_BRIDGE.into(),
+        message: if stale { "no frames from the server".into() } else { "bridging".into() },
+        hardware_id: hw,
+        values,
+    });
+    DiagnosticArray { header: Header { stamp, frame_id: String::new() }, status }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn joy(axes: Vec<f32>, buttons: Vec<i32>) -> Joy {
+        Joy { header: Header::default(), axes, buttons }
+    }
+
+    #[test]
+    fn joy_becomes_a_joystick_frame_with_fresh_sequences() {
+        let mut t = JoyTranslator::new(77);
+        let mut buf = Vec::new();
+        t.translate(&joy(vec![0.5, -1.0], vec![0, 1, 1]), &mut buf).unwrap();
+        let msgs::InputCommand::Joystick(j) = msgs::InputCommand::decode(&buf).unwrap() else { panic!() };
+        assert_eq!(
+            (j.sequence, j.source_id, j.axes(), j.buttons, j.button_count),
+            (1, 77, &[0.5, -1.0][..], 0b110, 3)
+        );
+        t.translate(&joy(vec![], vec![]), &mut buf).unwrap();
+        assert_eq!(msgs::InputCommand::decode(&buf).unwrap().sequence(), 2);
+        assert_eq!(t.counters.forwarded, 2);
+    }
+
+    #[test]
+    fn malformed_joy_is_rejected_and_counted_by_reason() {
+        let mut t = JoyTranslator::new(1);
+        let mut buf = Vec::new();
+        let r = msgs::RejectReason::Oversize;
+        assert_eq!(t.translate(&joy(vec![0.0; 33], vec![]), &mut buf), Err(r));
+        assert!(buf.is_empty());
+        assert_eq!(t.translate(&joy(vec![], vec![0; 65]), &mut buf), Err(r));
+        assert_eq!(
+            t.translate(&joy(vec![0.0, f32::NAN], vec![]), &mut buf),
+            Err(msgs::RejectReason::NonFinite)
+        );
+        assert_eq!(
+            t.translate(&joy(vec![f32::INFINITY], vec![]), &mut buf),
+            Err(msgs::RejectReason::NonFinite)
+        );
+        assert_eq!(t.translate(&joy(vec![1.5], vec![]), &mut buf), Err(msgs::RejectReason::OutOfRange));
+        assert_eq!(t.translate(&joy(vec![], vec![2]), &mut buf), Err(msgs::RejectReason::OutOfRange));
+        assert_eq!(t.counters.rejected_for(r), 2);
+        assert_eq!(t.counters.rejected_for(msgs::RejectReason::NonFinite), 2);
+        assert_eq!(t.counters.rejected_total(), 6);
+        assert_eq!((t.counters.received, t.counters.forwarded), (6, 0));
+        // 32 axes is the most a frame carries: accepted, sequence 1.
+        t.translate(&joy(vec![0.25; 32], vec![1; 64]), &mut buf).unwrap();
+        assert_eq!(msgs::InputCommand::decode(&buf).unwrap().sequence(), 1);
+    }
+
+    #[test]
+    fn hull_of_a_tetrahedron_has_four_outward_faces() {
+        let v = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+        let t = hull_triangles(&v);
+        assert_eq!(t.len(), 4);
+        let c = [0.25, 0.25, 0.25];
+        for [a, b, d] in t {
+            let (e1, e2) = (sub(v[b], v[a]), sub(v[d], v[a]));
+            let n =
+                [e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]];
+            assert!(dot(n, sub(v[a], c)) > 0.0, "outward");
+        }
+    }
+
+    #[test]
+    fn rotate_turns_z_onto_minus_y_about_x() {
+        let h = std::f64::consts::FRAC_1_SQRT_2;
+        let r = rotate([h, 0.0, 0.0, h], [0.0, 0.0, 1.0]);
+        assert!((r[0]).abs() < 1e-12 && (r[1] + 1.0).abs() < 1e-12 && r[2].abs() < 1e-12, "{r:?}");
+    }
+
+    #[test]
+    fn markers_cover_every_shape_in_the_body_frame() {
+        let q = [0.0, 0.0, 0.0, 1.0];
+        let col = |shape| msgs::Collider { shape, position: [0.0, 0.0, 0.5], orientation: q };
+        let body = msgs::BodyInfo {
+            id: 3,
+            name: "hook".into(),
+            kind: msgs::BodyKind::Dynamic,
+            mass: 1.0,
+            colliders: vec![
+                col(msgs::Shape::Box { half_extents: [1.0, 2.0, 3.0] }),
+                col(msgs::Shape::Capsule { radius: 0.1, half_height: 0.2 }),
+                col(msgs::Shape::Heightfield {
+                    rows: 2,
+                    cols: 3,
+                    extent: [2.0, 1.0],
+                    heights: msgs::HeightData::Inline(vec![0.0; 6]),
+                }),
+                col(msgs::Shape::Trimesh { mesh: msgs::MeshData::Reference("file:///m.stl".into()) }),
+            ],
+        };
+        let mut m = Vec::new();
+        body_markers(&body, &mut m);
+        let kinds: Vec<_> = m.iter().map(|m| (m.id, m.type_)).collect();
+        assert_eq!(
+            kinds,
+            [
+                (0, Marker::CUBE),
+                (4, Marker::CYLINDER),
+                (5, Marker::SPHERE),
+                (6, Marker::SPHERE),
+                (8, Marker::TRIANGLE_LIST),
+                (12, Marker::MESH_RESOURCE)
+            ]
+        );
+        assert_eq!(m[0].scale, Vector3 { x: 2.0, y: 4.0, z: 6.0 });
+        assert!(m.iter().all(|m| m.header.frame_id == "hook" && m.ns == "hook" && m.frame_locked));
+        assert!((m[2].pose.position.z - 0.7).abs() < 1e-12 && (m[3].pose.position.z - 0.3).abs() < 1e-12);
+        assert_eq!(m[4].points.len(), 2 * 2 * 3);
+        assert_eq!(m[5].mesh_resource, "file:///m.stl");
+    }
+}

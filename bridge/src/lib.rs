@@ -1,0 +1,121 @@
+//! `pivotsim-ros2-bridge`: the pivotsim server seen from ROS 2, with no ROS installation needed to
+//! build or run it (DDS in pure Rust: `ros2-client` over RustDDS).
+//!
+//! The bridge is a separate process and a Zenoh client of the server: it subscribes to
+//! `pivotsim/<world>/poses` and `…/stats`, queries `…/scene` for body names and shapes, and
+//! publishes `/tf`, `/tf_static`, `/pivotsim/poses`, `/pivotsim/markers`, `/pivotsim/stats` and
+//! `/clock`; it subscribes to `/joy` and puts each valid `sensor_msgs/Joy` as a joystick frame of its
+//! own source on `pivotsim/<world>/cmd/joystick`, where the server applies the scene's joystick
+//! mapping, its validation, its rejection counters and its deadman. The step loop cannot be
+//! stalled by ROS: the server only ever publishes to Zenoh with congestion control *drop*, and
+//! whatever the DDS side does happens in this other process.
+//!
+//! | module | concept |
+//! |---|---|
+//! | [`ros_msgs`] | the ROS message types (serde structs in `.msg` field order) |
+//! | [`convert`] | frames → ROS messages, `Joy` → joystick frames, diagnostics |
+//! | [`zenoh_link`] | the Zenoh client: latest frames, scene queries, joystick puts |
+//! | [`dds`] | DDS participant (domain, interfaces) and the topics' QoS (feature `ros2`) |
+//! | `bridge` | the loop: [`run`] (feature `ros2`) |
+//!
+//! See `bridge/README.md` for topics, QoS, loopback discovery and the tests.
+
+pub mod convert;
+#[cfg(feature = "ros2")]
+pub mod dds;
+pub mod ros_msgs;
+pub mod zenoh_link;
+
+#[cfg(feature = "ros2")]
+mod bridge;
+#[cfg(feature = "ros2")]
+pub use bridge::run;
+
+use std::net::IpAddr;
+use std::path::PathBuf;
+use std::time::Duration;
+
+pub use convert::StampSource;
+
+/// Topic names the bridge uses on the ROS side.
+pub mod topics {
+    /// Transforms of the moving bodies.
+    pub const TF: &str = "/tf";
+    /// Transforms of the static bodies.
+    pub const TF_STATIC: &str = "/tf_static";
+    /// Every body's pose.
+    pub const POSES: &str = "/pivotsim/poses";
+    /// The bodies' shapes.
+    pub const MARKERS: &str = "/pivotsim/markers";
+    /// Solver, input and bridge diagnostics.
+    pub const STATS: &str = "/pivotsim/stats";
+    /// Simulation time.
+    pub const CLOCK: &str = "/clock";
+    /// Operator input (default; `--joy-topic`).
+    pub const JOY: &str = "/joy";
+}
+
+/// How the bridge runs.
+#[derive(Debug, Clone)]
+pub struct BridgeConfig {
+    /// World name: the `<world>` of the server's keys.
+    pub world: String,
+    /// Zenoh endpoints of the server (peer mode, no multicast scouting).
+    pub connect: Vec<String>,
+    /// A Zenoh configuration file instead (routers, multi-host rigs); `connect` still applies.
+    pub zenoh_config: Option<PathBuf>,
+    /// DDS domain id (`ROS_DOMAIN_ID`).
+    pub domain_id: u16,
+    /// Local interface addresses DDS may use (empty: all; `127.0.0.1`: this host only).
+    pub dds_interfaces: Vec<IpAddr>,
+    /// Frame every body is placed in.
+    pub world_frame: String,
+    /// Clock of the stamps.
+    pub stamp: StampSource,
+    /// Topic of the operator input.
+    pub joy_topic: String,
+    /// Node name.
+    pub node_name: String,
+    /// Period of `/pivotsim/stats`.
+    pub stats_period: Duration,
+    /// Period at which the markers are sent again (for subscribers without transient-local
+    /// durability).
+    pub markers_period: Duration,
+    /// Joystick source id of the forwarded frames (`None`: random).
+    pub source_id: Option<u32>,
+    /// Log the counters every interval (`None`: never).
+    pub log_interval: Option<Duration>,
+}
+
+impl Default for BridgeConfig {
+    fn default() -> Self {
+        BridgeConfig {
+            world: pivotsim_msgs::DEFAULT_WORLD.into(),
+            connect: vec!["tcp/127.0.0.1:7447".into()],
+            zenoh_config: None,
+            domain_id: 0,
+            dds_interfaces: Vec::new(),
+            world_frame: "world".into(),
+            stamp: StampSource::Sim,
+            joy_topic: topics::JOY.into(),
+            node_name: "pivotsim_bridge".into(),
+            stats_period: Duration::from_millis(100),
+            markers_period: Duration::from_secs(1),
+            source_id: None,
+            log_interval: Some(Duration::from_secs(10)),
+        }
+    }
+}
+
+/// What the bridge did, when it stops.
+#[derive(Debug, Clone, Default)]
+pub struct BridgeReport {
+    /// Pose frames received.
+    pub pose_frames: u64,
+    /// `/tf` messages published.
+    pub tf_published: u64,
+    /// The `/joy` counters.
+    pub joy: convert::JoyCounters,
+    /// Failed ROS publishes.
+    pub ros_publish_failed: u64,
+}

@@ -1,0 +1,175 @@
+//! The bridge's Zenoh client: a peer session that connects to the server (no listening, no
+//! multicast scouting), the latest pose and stats frames (latest wins: a slow ROS side skips
+//! frames, it never queues them), non-blocking scene queries, and the joystick publisher.
+
+use std::path::Path;
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::{Arc, Condvar, Mutex};
+use std::time::{Duration, Instant};
+
+use anyhow::anyhow;
+use pivotsim_msgs as msgs;
+use zenoh::Wait;
+use zenoh::pubsub::{Publisher, Subscriber};
+use zenoh::qos::CongestionControl;
+
+/// A client configuration: peer mode, connect to `connect`, listen nowhere, no multicast
+/// scouting; or the given file with `connect` added.
+pub fn config(connect: &[String], file: Option<&Path>) -> anyhow::Result<zenoh::Config> {
+    let err = |e: zenoh::Error| anyhow!("zenoh config: {e}");
+    let mut c = match file {
+        Some(p) => zenoh::Config::from_file(p).map_err(err)?,
+        None => {
+            let mut c = zenoh::Config::default();
+            c.insert_json5("mode", "\"peer\"").map_err(err)?;
+            c.insert_json5("listen/endpoints", "[]").map_err(err)?;
+            c.insert_json5("scouting/multicast/enabled", "false").map_err(err)?;
+            c
+        }
+    };
+    if !connect.is_empty() {
+        let json = serde_json_list(connect);
+        c.insert_json5("connect/endpoints", &json).map_err(err)?;
+    }
+    Ok(c)
+}
+
+fn serde_json_list(v: &[String]) -> String {
+    let items: Vec<String> = v.iter().map(|s| format!("{s:?}")).collect();
+    format!("[{}]", items.join(","))
+}
+
+/// The newest frames from the server.
+#[derive(Debug, Default)]
+pub struct Latest {
+    /// Newest pose frame not yet taken.
+    pub poses: Option<Vec<u8>>,
+    /// Newest stats frame not yet taken.
+    pub stats: Option<Vec<u8>>,
+    /// Newest scene description reply not yet taken.
+    pub scene: Option<Vec<u8>>,
+    /// When the last frame arrived.
+    pub last_frame: Option<Instant>,
+}
+
+/// Shared between the Zenoh callbacks and the bridge loop.
+#[derive(Debug, Default)]
+pub struct Inbox {
+    latest: Mutex<Latest>,
+    ready: Condvar,
+    /// Pose frames received.
+    pub pose_frames: AtomicU64,
+    /// Pose frames replaced before they were taken.
+    pub pose_frames_skipped: AtomicU64,
+}
+
+impl Inbox {
+    fn put(&self, f: impl FnOnce(&mut Latest)) {
+        if let Ok(mut l) = self.latest.lock() {
+            f(&mut l);
+        }
+        self.ready.notify_all();
+    }
+
+    /// Waits up to `timeout` for something new, then takes everything new.
+    pub fn take(&self, timeout: Duration) -> Latest {
+        let Ok(mut l) = self.latest.lock() else { return Latest::default() };
+        if l.poses.is_none() && l.stats.is_none() && l.scene.is_none() {
+            l = match self.ready.wait_timeout(l, timeout) {
+                Ok((l, _)) => l,
+                Err(_) => return Latest::default(),
+            };
+        }
+        Latest {
+            poses: l.poses.take(),
+            stats: l.stats.take(),
+            scene: l.scene.take(),
+            last_frame: l.last_frame,
+        }
+    }
+}
+
+/// The bridge's Zenoh side.
+pub struct ZenohLink {
+    session: zenoh::Session,
+    world: msgs::WorldName,
+    /// What arrived.
+    pub inbox: Arc<Inbox>,
+    _poses: Subscriber<()>,
+    _stats: Subscriber<()>,
+    joystick: Publisher<'static>,
+}
+
+impl std::fmt::Debug for ZenohLink {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("ZenohLink").field("world", &self.world).finish()
+    }
+}
+
+impl ZenohLink {
+    /// Opens the session and subscribes to `world`'s poses and stats.
+    pub fn open(config: zenoh::Config, world: msgs::WorldName) -> anyhow::Result<ZenohLink> {
+        let err = |e: zenoh::Error| anyhow!("zenoh: {e}");
+        let session = zenoh::open(config).wait().map_err(err)?;
+        let inbox = Arc::new(Inbox::default());
+        let i = inbox.clone();
+        let poses = session
+            .declare_subscriber(world.key(msgs::Topic::Poses))
+            .callback(move |s| {
+                let bytes = s.payload().to_bytes().into_owned();
+                i.pose_frames.fetch_add(1, Ordering::Relaxed);
+                let ii = i.clone();
+                i.put(|l| {
+                    if l.poses.replace(bytes).is_some() {
+                        ii.pose_frames_skipped.fetch_add(1, Ordering::Relaxed);
+                    }
+                    l.last_frame = Some(Instant::now());
+                });
+            })
+            .wait()
+            .map_err(err)?;
+        let i = inbox.clone();
+        let stats = session
+            .declare_subscriber(world.key(msgs::Topic::Stats))
+            .callback(move |s| {
+                let bytes = s.payload().to_bytes().into_owned();
+                i.put(|l| {
+                    l.stats = Some(bytes);
+                    l.last_frame = Some(Instant::now());
+                });
+            })
+            .wait()
+            .map_err(err)?;
+        let joystick = session
+            .declare_publisher(world.key(msgs::Topic::Joystick))
+            .congestion_control(CongestionControl::Drop)
+            .express(true)
+            .wait()
+            .map_err(err)?;
+        Ok(ZenohLink { session, world, inbox, _poses: poses, _stats: stats, joystick })
+    }
+
+    /// Asks the server for its scene description; the reply lands in the inbox (non-blocking).
+    pub fn request_scene(&self) {
+        let i = self.inbox.clone();
+        let r = self
+            .session
+            .get(self.world.key(msgs::Topic::Scene))
+            .timeout(Duration::from_secs(2))
+            .callback(move |reply| {
+                if let Ok(sample) = reply.result() {
+                    let bytes = sample.payload().to_bytes().into_owned();
+                    i.put(|l| l.scene = Some(bytes));
+                }
+            })
+            .wait();
+        if let Err(e) = r {
+            tracing::warn!("scene query: {e}");
+        }
+    }
+
+    /// Publishes one joystick frame (never blocks: dropped under congestion).
+    pub fn put_joystick(&self, frame: &[u8]) -> anyhow::Result<()> {
+        self.joystick.put(frame.to_vec()).wait().map_err(|e| anyhow!("zenoh put: {e}"))
+    }
+}

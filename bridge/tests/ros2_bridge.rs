@@ -1,0 +1,636 @@
+//! The bridge end to end on loopback: an in-process server (ephemeral Zenoh port, unique world),
+//! the bridge binary as another process, and a ROS 2 node (ros2-client, DDS) in this test
+//! process, on a DDS domain of its own with DDS confined to 127.0.0.1 (discovery by unicast to
+//! the localhost discovery ports: no multicast needed on `lo`). Every wait is bounded.
+//!
+//! - `/tf` carries every moving body's frame and `/tf_static` the static one, with transforms
+//!   equal to the Zenoh pose frame of the same simulation time; `/pivotsim/poses`, `/clock` and
+//!   the markers arrive too.
+//! - A `/joy` stream moves the driven joint; when it stops, the server's deadman trips.
+//! - Malformed `/joy` (33 axes, a NaN axis) is rejected and counted by the bridge (its
+//!   diagnostics on `/pivotsim/stats`) and never reaches the server.
+
+#![cfg(feature = "ros2")]
+
+use std::collections::{BTreeSet, HashMap};
+use std::net::{Ipv4Addr, TcpListener};
+use std::path::PathBuf;
+use std::process::{Child, Command, Stdio};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Arc, Mutex};
+use std::thread::JoinHandle;
+use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
+
+use pivotsim_msgs as msgs;
+use pivotsim_ros2_bridge::convert::{DIAG_BRIDGE, DIAG_INPUTS};
+use pivotsim_ros2_bridge::ros_msgs::*;
+use pivotsim_ros2_bridge::{dds, topics};
+use pivotsim_server::serve::{ServeConfig, ServeReport, ZenohOptions, run};
+use ros2_client::qos::{Durability, History, WhenFull};
+use ros2_client::{Node, QosProfile, Subscription};
+use zenoh::Wait;
+
+/// A static base and a drum on a hinge about y, driven by joystick axis 0 at 2 rad/s full stick.
+const RIG: &str = r#"
+[scene]
+name = "joyrig"
+[[body]]
+name = "base"
+kind = "static"
+position = [0, 0, 0]
+[[body.shape]]
+type = "box"
+size = [2, 2, 0.2]
+[[body]]
+name = "drum"
+mass = 10
+inertia = [1, 1, 1]
+position = [0, 0, 1]
+[[body.shape]]
+type = "cylinder"
+radius = 0.3
+length = 0.5
+rotation = [90, 0, 0]
+[[body]]
+name = "hook"
+mass = 1
+position = [0.5, 0, 1]
+[[body.shape]]
+type = "ball"
+radius = 0.1
+[[joint]]
+name = "axle"
+type = "hinge"
+a = "drum"
+anchor = [0, 0, 1]
+axis = [0, 1, 0]
+[[joint]]
+name = "arm"
+type = "fixed"
+a = "hook"
+b = "drum"
+anchor = [0.5, 0, 1]
+[[actuator]]
+name = "spin"
+type = "velocity"
+joints = ["axle"]
+scale = [2.0]
+max_force = 1e6
+[[joystick.axis]]
+index = 0
+actuator = "spin"
+deadzone = 0.0
+"#;
+
+fn free_endpoint() -> String {
+    let l = TcpListener::bind("127.0.0.1:0").unwrap();
+    format!("tcp/127.0.0.1:{}", l.local_addr().unwrap().port())
+}
+
+fn tmp(name: &str) -> PathBuf {
+    std::env::temp_dir().join(format!("pivotsim-ros2-{}-{name}", std::process::id()))
+}
+
+/// A DDS domain per test (and per process, so that concurrent runs rarely meet): 20 ..= 199, well
+/// inside the range whose RTPS port numbers fit in 16 bits.
+fn domain(test: u16) -> u16 {
+    20 + (std::process::id() % 45) as u16 * 4 + test
+}
+
+struct Server {
+    endpoint: String,
+    world: msgs::WorldName,
+    shutdown: Arc<AtomicBool>,
+    thread: Option<JoinHandle<ServeReport>>,
+}
+
+impl Server {
+    fn start(tag: &str) -> Server {
+        let scene = tmp(&format!("{tag}.toml"));
+        std::fs::write(&scene, RIG).unwrap();
+        let endpoint = free_endpoint();
+        let world = format!("r{}-{tag}", std::process::id());
+        let config = ServeConfig {
+            scene: scene.display().to_string(),
+            world: world.clone(),
+            zenoh: Some(ZenohOptions { listen: vec![endpoint.clone()], ..ZenohOptions::default() }),
+            iceoryx2: false,
+            ..ServeConfig::default()
+        };
+        let shutdown = Arc::new(AtomicBool::new(false));
+        let flag = shutdown.clone();
+        let thread = std::thread::spawn(move || run(&config, flag).expect("server runs"));
+        Server { endpoint, world: msgs::WorldName::new(world).unwrap(), shutdown, thread: Some(thread) }
+    }
+
+    fn key(&self, t: msgs::Topic) -> String {
+        self.world.key(t)
+    }
+}
+
+impl Drop for Server {
+    fn drop(&mut self) {
+        self.shutdown.store(true, Ordering::Relaxed);
+        if let Some(t) = self.thread.take() {
+            let _ = t.join();
+        }
+    }
+}
+
+/// The bridge binary, killed on drop; its log goes to a file shown when a test fails.
+struct Bridge {
+    child: Child,
+    log: PathBuf,
+}
+
+impl Bridge {
+    fn spawn(server: &Server, domain: u16, tag: &str) -> Bridge {
+        let log = tmp(&format!("{tag}.log"));
+        let child = Command::new(env!("CARGO_BIN_EXE_pivotsim-ros2-bridge"))
+            .args(["--world", server.world.as_str(), "--connect", &server.endpoint])
+            .args(["--domain-id", &domain.to_string(), "--dds-interface", "127.0.0.1"])
+            .args(["--stats-rate", "20", "--source-id", "4242", "--log-interval", "1"])
+            .env("RUST_LOG", "info,zenoh=warn,rustdds=warn,ros2_client=warn")
+            .stdout(Stdio::null())
+            .stderr(std::fs::File::create(&log).unwrap())
+            .spawn()
+            .expect("the bridge binary starts");
+        Bridge { child, log }
+    }
+
+    fn log(&self) -> String {
+        std::fs::read_to_string(&self.log).unwrap_or_default()
+    }
+}
+
+impl Drop for Bridge {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+        if std::thread::panicking() {
+            eprintln!("---- bridge log ----\n{}", self.log());
+        }
+    }
+}
+
+/// A Zenoh client of the server with the latest stats and every pose frame by simulation time.
+struct Watcher {
+    _session: zenoh::Session,
+    _subs: Vec<zenoh::pubsub::Subscriber<()>>,
+    frames: Arc<Mutex<HashMap<i64, msgs::PoseFrame>>>,
+    latest_pose: Arc<Mutex<Option<msgs::PoseFrame>>>,
+    stats: Arc<Mutex<Option<msgs::SolverStats>>>,
+    description: msgs::SceneDescription,
+}
+
+fn nanos(t: f64) -> i64 {
+    Time::from_secs_f64(t).as_nanos()
+}
+
+impl Watcher {
+    fn connect(server: &Server) -> Watcher {
+        let mut c = zenoh::Config::default();
+        c.insert_json5("mode", "\"peer\"").unwrap();
+        c.insert_json5("listen/endpoints", "[]").unwrap();
+        c.insert_json5("connect/endpoints", &format!("[\"{}\"]", server.endpoint)).unwrap();
+        c.insert_json5("scouting/multicast/enabled", "false").unwrap();
+        let s = zenoh::open(c).wait().unwrap();
+        let deadline = Instant::now() + Duration::from_secs(10);
+        let description = loop {
+            assert!(Instant::now() < deadline, "the server did not answer its scene queryable");
+            let replies =
+                s.get(server.key(msgs::Topic::Scene)).timeout(Duration::from_millis(500)).wait().unwrap();
+            if let Ok(Some(r)) = replies.recv_timeout(Duration::from_millis(600))
+                && let Ok(sample) = r.result()
+            {
+                break msgs::SceneDescription::decode(&sample.payload().to_bytes()).unwrap();
+            }
+            std::thread::sleep(Duration::from_millis(50));
+        };
+        let frames = Arc::new(Mutex::new(HashMap::new()));
+        let latest_pose = Arc::new(Mutex::new(None));
+        let stats = Arc::new(Mutex::new(None));
+        let (f, lp) = (frames.clone(), latest_pose.clone());
+        let poses = s
+            .declare_subscriber(server.key(msgs::Topic::Poses))
+            .callback(move |sample| {
+                let p = msgs::PoseFrame::decode(&sample.payload().to_bytes()).unwrap();
+                f.lock().unwrap().insert(nanos(p.sim_time), p.clone());
+                *lp.lock().unwrap() = Some(p);
+            })
+            .wait()
+            .unwrap();
+        let st = stats.clone();
+        let stats_sub = s
+            .declare_subscriber(server.key(msgs::Topic::Stats))
+            .callback(move |sample| {
+                *st.lock().unwrap() = Some(msgs::SolverStats::decode(&sample.payload().to_bytes()).unwrap());
+            })
+            .wait()
+            .unwrap();
+        Watcher { _session: s, _subs: vec![poses, stats_sub], frames, latest_pose, stats, description }
+    }
+
+    fn stats(&self) -> Option<msgs::SolverStats> {
+        self.stats.lock().unwrap().clone()
+    }
+
+    fn body_id(&self, name: &str) -> u32 {
+        self.description.bodies.iter().find(|b| b.name == name).unwrap().id
+    }
+
+    /// Angular velocity about y of the latest frame's body `name`.
+    fn omega_y(&self, name: &str) -> f64 {
+        let id = self.body_id(name);
+        let p = self.latest_pose.lock().unwrap().clone().expect("a pose frame");
+        p.bodies.iter().find(|b| b.id == id).unwrap().angular_velocity[1]
+    }
+}
+
+/// A ROS 2 node of the test on the domain, DDS on loopback only.
+fn ros_node(domain: u16, name: &str) -> (ros2_client::Context, Node) {
+    let ctx = dds::context(domain, &[Ipv4Addr::LOCALHOST.into()]).unwrap();
+    let node = dds::node(&ctx, name).unwrap();
+    (ctx, node)
+}
+
+fn reliable(depth: usize) -> QosProfile {
+    QosProfile::subscription_default()
+        .reliability_reliable(WhenFull::DEFAULT)
+        .history(History::KeepLast { depth })
+}
+
+fn latched() -> QosProfile {
+    reliable(1).durability(Durability::TransientLocal)
+}
+
+fn subscribe<M: RosType + serde::de::DeserializeOwned + 'static>(
+    node: &mut Node,
+    name: &str,
+    qos: QosProfile,
+) -> Subscription<M> {
+    let topic = dds::topic::<M>(node, name, &qos).unwrap();
+    node.create_subscription::<M>(&topic, Some(qos)).unwrap()
+}
+
+fn drain<M: serde::de::DeserializeOwned + 'static>(s: &Subscription<M>, out: &mut Vec<(M, Instant)>) {
+    while let Ok(Some((m, _))) = s.take() {
+        out.push((m, Instant::now()));
+    }
+}
+
+fn wall_ns() -> u64 {
+    SystemTime::now().duration_since(UNIX_EPOCH).unwrap().as_nanos() as u64
+}
+
+fn percentile(v: &mut [f64], p: f64) -> f64 {
+    v.sort_by(f64::total_cmp);
+    v[((v.len() - 1) as f64 * p).round() as usize]
+}
+
+#[test]
+fn tf_carries_every_body_frame_with_the_zenoh_poses() {
+    let server = Server::start("tf");
+    let watcher = Watcher::connect(&server);
+    let d = domain(0);
+    let bridge = Bridge::spawn(&server, d, "tf");
+    let (_ctx, mut node) = ros_node(d, "tf_probe");
+    let tf_sub = subscribe::<TFMessage>(&mut node, topics::TF, reliable(100));
+    let static_sub = subscribe::<TFMessage>(&mut node, topics::TF_STATIC, latched());
+    let poses_sub = subscribe::<PoseArray>(&mut node, topics::POSES, reliable(100));
+    let markers_sub = subscribe::<MarkerArray>(&mut node, topics::MARKERS, latched());
+    let clock_sub = subscribe::<Clock>(&mut node, topics::CLOCK, reliable(100));
+
+    let (mut tf, mut fixed, mut poses, mut markers, mut clock) = (vec![], vec![], vec![], vec![], vec![]);
+    let mut latency_ms = Vec::new();
+    let deadline = Instant::now() + Duration::from_secs(30);
+    while Instant::now() < deadline
+        && (tf.len() < 60 || fixed.is_empty() || markers.is_empty() || poses.len() < 30 || clock.len() < 30)
+    {
+        let n = tf.len();
+        drain(&tf_sub, &mut tf);
+        // Latency: the server's wall clock at the end of the step → here.
+        let now = wall_ns();
+        let frames = watcher.frames.lock().unwrap();
+        for (m, _) in &tf[n..] {
+            if let Some(f) = frames.get(&m.transforms[0].header.stamp.as_nanos()) {
+                latency_ms.push((now.saturating_sub(f.wall_time_ns)) as f64 / 1e6);
+            }
+        }
+        drop(frames);
+        drain(&static_sub, &mut fixed);
+        drain(&poses_sub, &mut poses);
+        drain(&markers_sub, &mut markers);
+        drain(&clock_sub, &mut clock);
+        std::thread::sleep(Duration::from_millis(2));
+    }
+    assert!(tf.len() >= 60, "{} /tf messages in 30 s", tf.len());
+    assert!(!fixed.is_empty(), "no /tf_static");
+    assert!(!markers.is_empty(), "no markers");
+    assert!(poses.len() >= 30 && clock.len() >= 30, "{} poses, {} clock", poses.len(), clock.len());
+
+    let names: HashMap<&str, u32> =
+        watcher.description.bodies.iter().map(|b| (b.name.as_str(), b.id)).collect();
+    let frames = watcher.frames.lock().unwrap();
+    let check = |t: &TransformStamped, f: &msgs::PoseFrame| {
+        assert_eq!(t.header.frame_id, "world");
+        let id = names[t.child_frame_id.as_str()];
+        let b = f.bodies.iter().find(|b| b.id == id).unwrap();
+        let tr = &t.transform;
+        let got = [tr.translation.x, tr.translation.y, tr.translation.z];
+        let q = [tr.rotation.x, tr.rotation.y, tr.rotation.z, tr.rotation.w];
+        for k in 0..3 {
+            assert!(
+                (got[k] - b.position[k]).abs() <= 1e-9,
+                "{}: {got:?} vs {:?}",
+                t.child_frame_id,
+                b.position
+            );
+        }
+        for k in 0..4 {
+            assert!(
+                (q[k] - b.orientation[k]).abs() <= 1e-9,
+                "{}: {q:?} vs {:?}",
+                t.child_frame_id,
+                b.orientation
+            );
+        }
+    };
+    // Every /tf message: the moving bodies, equal to the Zenoh frame of the same time.
+    let mut matched = 0;
+    for (m, _) in &tf {
+        let frame_ids: BTreeSet<&str> = m.transforms.iter().map(|t| t.child_frame_id.as_str()).collect();
+        assert_eq!(frame_ids, BTreeSet::from(["drum", "hook"]));
+        let stamp = m.transforms[0].header.stamp;
+        assert!(m.transforms.iter().all(|t| t.header.stamp == stamp));
+        if let Some(f) = frames.get(&stamp.as_nanos()) {
+            for t in &m.transforms {
+                check(t, f);
+            }
+            matched += 1;
+        }
+    }
+    assert!(matched >= 50, "{matched} of {} /tf messages matched a Zenoh frame", tf.len());
+    // /tf_static: the base, at its Zenoh pose.
+    let st = &fixed.last().unwrap().0;
+    assert_eq!(st.transforms.iter().map(|t| t.child_frame_id.as_str()).collect::<Vec<_>>(), ["base"]);
+    let any_frame = frames.values().next().unwrap();
+    check(&st.transforms[0], any_frame);
+    // Every body has a frame on /tf or /tf_static.
+    let all: BTreeSet<&str> = names.keys().copied().collect();
+    assert_eq!(all, BTreeSet::from(["base", "drum", "hook"]));
+    // /pivotsim/poses: every body, in the frame's order, equal to the Zenoh frame.
+    let mut pose_matched = 0;
+    for (p, _) in &poses {
+        assert_eq!(p.header.frame_id, "world");
+        if let Some(f) = frames.get(&p.header.stamp.as_nanos()) {
+            assert_eq!(p.poses.len(), f.bodies.len());
+            for (a, b) in p.poses.iter().zip(&f.bodies) {
+                assert_eq!([a.position.x, a.position.y, a.position.z], b.position);
+                assert_eq!(
+                    [a.orientation.x, a.orientation.y, a.orientation.z, a.orientation.w],
+                    b.orientation
+                );
+            }
+            pose_matched += 1;
+        }
+    }
+    assert!(pose_matched >= 20, "{pose_matched} PoseArrays matched");
+    // /clock: simulation time, increasing, equal to frames' times.
+    assert!(clock.windows(2).all(|w| w[1].0.clock > w[0].0.clock));
+    assert!(clock.iter().filter(|(c, _)| frames.contains_key(&c.clock.as_nanos())).count() >= 20);
+    // Markers: every body's shapes in its own frame.
+    let m = &markers.last().unwrap().0;
+    for body in ["base", "drum", "hook"] {
+        assert!(
+            m.markers.iter().any(|k| k.ns == body && k.header.frame_id == body && k.frame_locked),
+            "{body}"
+        );
+    }
+    let cube = m.markers.iter().find(|k| k.ns == "base").unwrap();
+    assert_eq!((cube.type_, cube.scale), (Marker::CUBE, Vector3 { x: 2.0, y: 2.0, z: 0.2 }));
+    let cyl = m.markers.iter().find(|k| k.ns == "drum").unwrap();
+    assert_eq!(cyl.type_, Marker::CYLINDER);
+    assert!((cyl.scale.x - 0.6).abs() < 1e-12 && (cyl.scale.z - 0.5).abs() < 1e-12);
+
+    let mut ms = latency_ms.clone();
+    if !ms.is_empty() {
+        let (p50, p99, max) = (percentile(&mut ms, 0.5), percentile(&mut ms, 0.99), percentile(&mut ms, 1.0));
+        eprintln!(
+            "server step end → /tf received: {} samples, p50 {p50:.2} ms, p99 {p99:.2} ms, max {max:.2} ms (includes up to 2 ms polling)",
+            ms.len()
+        );
+    }
+    let first = tf.first().unwrap().1;
+    let last = tf.last().unwrap().1;
+    eprintln!(
+        "/tf rate {:.1} Hz over {:.2} s",
+        (tf.len() - 1) as f64 / (last - first).as_secs_f64(),
+        (last - first).as_secs_f64()
+    );
+    drop(bridge);
+}
+
+fn joy(axes: Vec<f32>) -> Joy {
+    Joy { header: Header::default(), axes, buttons: vec![0, 0] }
+}
+
+#[test]
+fn joy_moves_the_machine_and_its_absence_trips_the_deadman() {
+    let server = Server::start("joy");
+    let watcher = Watcher::connect(&server);
+    let d = domain(1);
+    let bridge = Bridge::spawn(&server, d, "joy");
+    let (_ctx, mut node) = ros_node(d, "joy_probe");
+    let qos = reliable(10);
+    let topic = dds::topic::<Joy>(&mut node, topics::JOY, &qos).unwrap();
+    let publisher = node.create_publisher::<Joy>(&topic, Some(qos)).unwrap();
+
+    // Full stick at 50 Hz until the server takes inputs (discovery included), then 1 s more.
+    let deadline = Instant::now() + Duration::from_secs(30);
+    let mut live_since = None;
+    while live_since.is_none_or(|t: Instant| t.elapsed() < Duration::from_secs(1)) {
+        assert!(Instant::now() < deadline, "the server took no /joy input within 30 s");
+        publisher.publish(joy(vec![1.0, 0.0])).unwrap();
+        std::thread::sleep(Duration::from_millis(20));
+        if live_since.is_none()
+            && watcher.stats().is_some_and(|s| s.inputs.accepted > 0 && !s.inputs.deadman_active)
+        {
+            live_since = Some(Instant::now());
+        }
+    }
+    let s = watcher.stats().unwrap();
+    assert!(!s.inputs.deadman_active);
+    assert_eq!(s.inputs.rejected_total(), 0, "{:?}", s.inputs);
+    let w = watcher.omega_y("drum");
+    assert!((w - 2.0).abs() < 0.05, "drum at {w} rad/s, 2 expected (full stick × scale 2)");
+    // Stop: the deadman trips within its 250 ms (+ a step, + loopback), the drum stops.
+    let stopped = Instant::now();
+    let tripped = loop {
+        let s = watcher.stats().unwrap();
+        if s.inputs.deadman_active {
+            break stopped.elapsed();
+        }
+        assert!(stopped.elapsed() < Duration::from_secs(3), "the deadman did not trip within 3 s");
+        std::thread::sleep(Duration::from_millis(5));
+    };
+    assert!(tripped >= Duration::from_millis(200), "deadman after {tripped:?}: too early");
+    assert!(tripped <= Duration::from_millis(600), "deadman after {tripped:?}");
+    std::thread::sleep(Duration::from_millis(300));
+    let s = watcher.stats().unwrap();
+    assert!(s.inputs.deadman_trips >= 1);
+    let w = watcher.omega_y("drum");
+    assert!(w.abs() < 0.05, "drum still at {w} rad/s after the deadman");
+    eprintln!("deadman tripped {tripped:?} after the last /joy; {} inputs accepted", s.inputs.accepted);
+    drop(bridge);
+}
+
+#[test]
+fn malformed_joy_is_rejected_and_counted_by_the_bridge() {
+    let server = Server::start("bad");
+    let watcher = Watcher::connect(&server);
+    let d = domain(2);
+    let bridge = Bridge::spawn(&server, d, "bad");
+    let (_ctx, mut node) = ros_node(d, "bad_probe");
+    let qos = reliable(10);
+    let topic = dds::topic::<Joy>(&mut node, topics::JOY, &qos).unwrap();
+    let publisher = node.create_publisher::<Joy>(&topic, Some(qos)).unwrap();
+    let stats_sub = subscribe::<DiagnosticArray>(&mut node, topics::STATS, reliable(10));
+
+    let count = |a: &DiagnosticArray, key: &str| -> u64 {
+        a.get(DIAG_BRIDGE).and_then(|s| s.value(key)).map(|v| v.parse().unwrap()).unwrap_or(0)
+    };
+    let mut latest: Option<DiagnosticArray> = None;
+    let deadline = Instant::now() + Duration::from_secs(30);
+    let mut sent = 0u64;
+    loop {
+        assert!(Instant::now() < deadline, "bridge diagnostics did not count the malformed /joy: {latest:?}");
+        // 33 axes, then a NaN axis.
+        publisher.publish(joy(vec![0.0; 33])).unwrap();
+        let mut nan = vec![0.0; 4];
+        nan[1] = f32::NAN;
+        publisher.publish(joy(nan)).unwrap();
+        sent += 2;
+        std::thread::sleep(Duration::from_millis(50));
+        let mut got = Vec::new();
+        drain(&stats_sub, &mut got);
+        if let Some((a, _)) = got.pop() {
+            latest = Some(a);
+        }
+        if let Some(a) = &latest
+            && count(a, "joy_rejected.oversize") >= 3
+            && count(a, "joy_rejected.non-finite") >= 3
+        {
+            break;
+        }
+    }
+    let a = latest.unwrap();
+    let (received, rejected, forwarded) =
+        (count(&a, "joy_received"), count(&a, "joy_rejected"), count(&a, "joy_forwarded"));
+    assert_eq!(forwarded, 0);
+    assert_eq!(received, rejected, "every /joy received was rejected");
+    assert_eq!(rejected, count(&a, "joy_rejected.oversize") + count(&a, "joy_rejected.non-finite"));
+    assert!(received <= sent);
+    // The bridge's status carries its counters; the server's input status says nothing came.
+    let st = a.get(DIAG_BRIDGE).unwrap();
+    assert_eq!(st.value("joy_source_id"), Some("4242"));
+    let inputs = a.get(DIAG_INPUTS).expect("server input status");
+    assert_eq!(inputs.value("accepted"), Some("0"));
+    assert_eq!(inputs.value("rejected"), Some("0"));
+    // Over Zenoh: the server received none of them.
+    let s = watcher.stats().unwrap();
+    assert_eq!((s.inputs.accepted, s.inputs.rejected_total()), (0, 0), "{:?}", s.inputs);
+    // And the log says so.
+    std::thread::sleep(Duration::from_millis(1100));
+    let log = bridge.log();
+    assert!(log.contains("/joy rejected (oversize)") && log.contains("/joy rejected (non-finite)"), "{log}");
+    // A valid Joy afterwards is forwarded with the next sequence and accepted.
+    let deadline = Instant::now() + Duration::from_secs(10);
+    while watcher.stats().is_none_or(|s| s.inputs.accepted == 0) {
+        assert!(Instant::now() < deadline, "a valid /joy after malformed ones was not accepted");
+        publisher.publish(joy(vec![0.5])).unwrap();
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    assert_eq!(watcher.stats().unwrap().inputs.rejected_total(), 0);
+    drop(bridge);
+}
+
+#[test]
+fn bridge_waits_for_a_late_server_and_never_slows_it() {
+    // The bridge first: it connects to an endpoint nobody listens on yet.
+    let endpoint = free_endpoint();
+    let world = format!("r{}-late", std::process::id());
+    let d = domain(3);
+    let log = tmp("late.log");
+    let child = Command::new(env!("CARGO_BIN_EXE_pivotsim-ros2-bridge"))
+        .args(["--world", &world, "--connect", &endpoint])
+        .args(["--domain-id", &d.to_string(), "--dds-interface", "127.0.0.1", "--stats-rate", "20"])
+        .stdout(Stdio::null())
+        .stderr(std::fs::File::create(&log).unwrap())
+        .spawn()
+        .unwrap();
+    let bridge = Bridge { child, log };
+    let (_ctx, mut node) = ros_node(d, "late_probe");
+    let stats_sub = subscribe::<DiagnosticArray>(&mut node, topics::STATS, reliable(10));
+    let tf_sub = subscribe::<TFMessage>(&mut node, topics::TF, reliable(100));
+    // A subscriber that never reads.
+    let _stalled = subscribe::<TFMessage>(&mut node, topics::TF, reliable(1));
+    let stale = |deadline: Instant| loop {
+        assert!(Instant::now() < deadline, "no bridge diagnostics");
+        let mut got = Vec::new();
+        drain(&stats_sub, &mut got);
+        if let Some((a, _)) = got.pop() {
+            break a;
+        }
+        std::thread::sleep(Duration::from_millis(10));
+    };
+    let a = stale(Instant::now() + Duration::from_secs(30));
+    let st = a.get(DIAG_BRIDGE).unwrap();
+    assert_eq!(st.level, DiagnosticStatus::STALE, "{st:?}");
+    assert_eq!(st.value("server_silent_s"), Some("never heard"));
+    assert!(a.get(DIAG_INPUTS).is_none());
+
+    // Now the server, on that endpoint and world.
+    let scene = tmp("late.toml");
+    std::fs::write(&scene, RIG).unwrap();
+    let config = ServeConfig {
+        scene: scene.display().to_string(),
+        world: world.clone(),
+        zenoh: Some(ZenohOptions { listen: vec![endpoint.clone()], ..ZenohOptions::default() }),
+        iceoryx2: false,
+        ..ServeConfig::default()
+    };
+    let shutdown = Arc::new(AtomicBool::new(false));
+    let flag = shutdown.clone();
+    let server = Server {
+        endpoint,
+        world: msgs::WorldName::new(world).unwrap(),
+        shutdown,
+        thread: Some(std::thread::spawn(move || run(&config, flag).expect("server runs"))),
+    };
+    let watcher = Watcher::connect(&server);
+    let deadline = Instant::now() + Duration::from_secs(30);
+    let mut tf = Vec::new();
+    while tf.len() < 10 {
+        assert!(Instant::now() < deadline, "the bridge did not pick up the late server within 30 s");
+        drain(&tf_sub, &mut tf);
+        std::thread::sleep(Duration::from_millis(10));
+    }
+    // The server's step rate with the bridge and a stalled ROS subscriber attached.
+    while watcher.latest_pose.lock().unwrap().is_none() {
+        assert!(Instant::now() < deadline, "no pose frame over Zenoh");
+        std::thread::sleep(Duration::from_millis(10));
+    }
+    let first = watcher.latest_pose.lock().unwrap().clone().unwrap().sequence;
+    let t0 = Instant::now();
+    std::thread::sleep(Duration::from_secs(2));
+    let last = watcher.latest_pose.lock().unwrap().clone().unwrap().sequence;
+    let rate = (last - first) as f64 / t0.elapsed().as_secs_f64();
+    assert!((50.0..=70.0).contains(&rate), "{rate:.1} steps/s (60 expected)");
+    drain(&stats_sub, &mut Vec::new());
+    let a = stale(Instant::now() + Duration::from_secs(5));
+    assert_eq!(a.get(DIAG_BRIDGE).unwrap().level, DiagnosticStatus::OK);
+    assert!(a.get(DIAG_INPUTS).is_some());
+    eprintln!("late server: bridged; server at {rate:.1} steps/s with a stalled /tf subscriber");
+    drop(bridge);
+}
