@@ -156,7 +156,7 @@ struct ServeArgs {
 }
 
 /// The scene `serve` runs when none is given.
-const DEFAULT_SCENE: &str = "pendulum";
+const DEFAULT_SCENE: &str = "forklift";
 
 fn serve(args: ServeArgs) -> anyhow::Result<()> {
     use std::io::IsTerminal;

@@ -14,7 +14,9 @@
 //! the loop drains the inbox, steps, and publishes the step's frames. Publishing never waits for a
 //! subscriber: Zenoh publishers drop under congestion, iceoryx2 publishers discard when a
 //! subscriber's buffer is full; a publisher error is logged (rate-limited) and the next step tries
-//! again. Timing: step `k` is due at `t₀ + k h / rtf`; a step that ends after its deadline counts
+//! again. While paused the loop keeps publishing the last state (same sequence, fresh wall time
+//! and input counters) at the step rate. Sequence numbers never restart, also not on `reset` or
+//! `load_scene` (the simulation time does). Timing: step `k` is due at `t₀ + k h / rtf`; a step that ends after its deadline counts
 //! an overrun, and the loop never runs more than [`MAX_CATCH_UP`] steps behind (beyond, it drops
 //! the backlog and counts it), so a stall does not cause a burst of catch-up steps.
 
@@ -320,7 +322,12 @@ fn serve_loop(
             }
         }
         let stepped = engine.tick(Instant::now());
-        if stepped || republish {
+        // Paused, the last state is published at the step rate (same sequence), so that consoles
+        // keep seeing the world and the input counters.
+        if stepped || republish || engine.is_paused() {
+            if !stepped {
+                engine.encode_frames(engine::wall_ns());
+            }
             for t in transports.iter_mut() {
                 t.publish(engine.pose_frame(), engine.stats_frame());
             }

@@ -1,19 +1,28 @@
-//! A counting global allocator for the allocation tests: every `alloc` and `realloc` of the test
-//! binary that includes this module is counted ([`allocations_during`]); memory is served by the system
-//! allocator. Include with `#[path = "support/counting_alloc.rs"] mod counting_alloc;`.
+//! A counting global allocator for the allocation tests: every `alloc` and `realloc` is counted
+//! per thread ([`allocations_during`] counts the calling thread's only, so that tests of one
+//! binary running in parallel do not see each other's allocations); memory is served by the
+//! system allocator. Include with `#[path = "support/counting_alloc.rs"] mod counting_alloc;`.
 
 use std::alloc::{GlobalAlloc, Layout, System};
-use std::sync::atomic::{AtomicUsize, Ordering};
+use std::cell::Cell;
 
 struct Counting;
 
-static ALLOCS: AtomicUsize = AtomicUsize::new(0);
+thread_local! {
+    // Const-initialized and without a destructor: touching it never allocates.
+    static ALLOCS: Cell<usize> = const { Cell::new(0) };
+}
+
+fn count() {
+    // `try_with`: during thread teardown the slot may be gone; those allocations are not ours.
+    let _ = ALLOCS.try_with(|c| c.set(c.get() + 1));
+}
 
 // SAFETY: forwards every call unchanged to the system allocator; only counts.
 #[allow(unsafe_code)]
 unsafe impl GlobalAlloc for Counting {
     unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        ALLOCS.fetch_add(1, Ordering::Relaxed);
+        count();
         // SAFETY: same contract as the caller's.
         unsafe { System.alloc(layout) }
     }
@@ -22,7 +31,7 @@ unsafe impl GlobalAlloc for Counting {
         unsafe { System.dealloc(ptr, layout) }
     }
     unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
-        ALLOCS.fetch_add(1, Ordering::Relaxed);
+        count();
         // SAFETY: same contract as the caller's.
         unsafe { System.realloc(ptr, layout, new_size) }
     }
@@ -33,9 +42,9 @@ static GLOBAL: Counting = Counting;
 
 /// Allocations (including reallocations) made while `f` runs.
 pub fn allocations_during(f: impl FnOnce()) -> usize {
-    let before = ALLOCS.load(Ordering::Relaxed);
+    let before = ALLOCS.with(Cell::get);
     f();
-    ALLOCS.load(Ordering::Relaxed) - before
+    ALLOCS.with(Cell::get) - before
 }
 
 /// Mean allocations per call of `f` over `n` calls.
