@@ -150,7 +150,7 @@ impl Bridge {
             .args(["--world", server.world.as_str(), "--connect", &server.endpoint])
             .args(["--domain-id", &domain.to_string(), "--dds-interface", "127.0.0.1"])
             .args(["--stats-rate", "20", "--source-id", "4242", "--log-interval", "1"])
-            .env("RUST_LOG", "info,zenoh=warn,rustdds=warn,ros2_client=warn")
+            .env("RUST_LOG", "info,zenoh=warn,rustdds=error,ros2_client=error")
             .stdout(Stdio::null())
             .stderr(std::fs::File::create(&log).unwrap())
             .spawn()
