@@ -164,6 +164,8 @@ pub fn run(config: &BridgeConfig, shutdown: Arc<AtomicBool>) -> anyhow::Result<B
     let mut want_scene = true;
     let mut frame = msgs::PoseFrame::default();
     let mut last_sim = f64::NEG_INFINITY;
+    // Sequence and simulation time of the last frame published for the current scene.
+    let mut published: Option<(u64, u64)> = None;
     let mut solver: Option<msgs::SolverStats> = None;
     let mut last_frame: Option<Instant> = None;
     let mut next_stats = Instant::now();
@@ -193,6 +195,7 @@ pub fn run(config: &BridgeConfig, shutdown: Arc<AtomicBool>) -> anyhow::Result<B
                     next_markers = Instant::now() + config.markers_period;
                     scene = Some(s);
                     static_sent = false;
+                    published = None;
                 }
                 Ok(_) => {}
                 Err(e) => warn!("scene description: {e}"),
@@ -211,7 +214,13 @@ pub fn run(config: &BridgeConfig, shutdown: Arc<AtomicBool>) -> anyhow::Result<B
                         want_scene = true; // reset or a new scene
                     }
                     last_sim = frame.sim_time;
+                    let repeat = published == Some((frame.sequence, frame.sim_time.to_bits()));
                     match &scene {
+                        // A paused server repeats its last frame (same sequence and time): with
+                        // simulation stamps that would be the same transforms at the same time
+                        // again, which tf2 reports as TF_REPEATED_DATA: skip it. Wall stamps
+                        // are fresh, so those repeats go out (not on /clock).
+                        Some(_) if repeat && config.stamp == crate::StampSource::Sim => {}
                         Some(s) if s.matches(&frame) => {
                             let stamp = config.stamp.stamp(frame.sim_time, frame.wall_time_ns);
                             let (moving, fixed) = convert::transforms(s, &frame, stamp, &config.world_frame);
@@ -222,7 +231,10 @@ pub fn run(config: &BridgeConfig, shutdown: Arc<AtomicBool>) -> anyhow::Result<B
                                 report.tf_published += 1;
                             }
                             poses.publish(convert::pose_array(&frame, stamp, &config.world_frame));
-                            clock.publish(Clock { clock: Time::from_secs_f64(frame.sim_time) });
+                            if !repeat {
+                                clock.publish(Clock { clock: Time::from_secs_f64(frame.sim_time) });
+                            }
+                            published = Some((frame.sequence, frame.sim_time.to_bits()));
                         }
                         _ => want_scene = true,
                     }

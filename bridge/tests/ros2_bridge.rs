@@ -231,6 +231,22 @@ impl Watcher {
         Watcher { _session: s, _subs: vec![poses, stats_sub], frames, latest_pose, stats, description }
     }
 
+    /// Sends a control command and checks that it succeeded.
+    fn control(&self, server: &Server, command: msgs::ControlCommand) {
+        let mut buf = Vec::new();
+        msgs::ControlRequest { id: 1, command }.encode(&mut buf).unwrap();
+        let replies = self
+            ._session
+            .get(server.key(msgs::Topic::Control))
+            .payload(buf)
+            .timeout(Duration::from_secs(2))
+            .wait()
+            .unwrap();
+        let reply = replies.recv_timeout(Duration::from_secs(3)).unwrap().expect("a control reply");
+        let r = msgs::ControlReply::decode(&reply.result().unwrap().payload().to_bytes()).unwrap();
+        assert!(matches!(r.outcome, msgs::ControlOutcome::Ok(_)), "{r:?}");
+    }
+
     fn stats(&self) -> Option<msgs::SolverStats> {
         self.stats.lock().unwrap().clone()
     }
@@ -412,6 +428,24 @@ fn tf_carries_every_body_frame_with_the_zenoh_poses() {
     let cyl = m.markers.iter().find(|k| k.ns == "drum").unwrap();
     assert_eq!(cyl.type_, Marker::CYLINDER);
     assert!((cyl.scale.x - 0.6).abs() < 1e-12 && (cyl.scale.z - 0.5).abs() < 1e-12);
+
+    drop(frames);
+    // Paused, the server repeats its last frame; the bridge does not repeat the transforms
+    // (tf2 would report TF_REPEATED_DATA) nor the clock.
+    watcher.control(&server, msgs::ControlCommand::Pause);
+    std::thread::sleep(Duration::from_millis(300));
+    let (mut after, mut clock_after) = (vec![], vec![]);
+    drain(&tf_sub, &mut after);
+    drain(&clock_sub, &mut clock_after);
+    let wall_before = watcher.latest_pose.lock().unwrap().as_ref().unwrap().wall_time_ns;
+    after.clear();
+    clock_after.clear();
+    std::thread::sleep(Duration::from_millis(500));
+    drain(&tf_sub, &mut after);
+    drain(&clock_sub, &mut clock_after);
+    let wall_after = watcher.latest_pose.lock().unwrap().as_ref().unwrap().wall_time_ns;
+    assert!(wall_after > wall_before, "the paused server keeps publishing");
+    assert_eq!((after.len(), clock_after.len()), (0, 0), "paused: /tf and /clock repeated");
 
     let mut ms = latency_ms.clone();
     if !ms.is_empty() {
