@@ -232,19 +232,13 @@ impl NarrowPhase {
                             if duplicate {
                                 continue;
                             }
-                            self.points.push(ContactPoint {
-                                ca: i as u32,
-                                cb: j as u32,
-                                a: bi,
-                                b: bj,
-                                features: [p.fid1.0 | tags[0], p.fid2.0 | tags[1]],
+                            self.points.push(pair.point(
+                                [p.fid1.0 | tags[0], p.fid2.0 | tags[1]],
                                 pa,
                                 pb,
                                 n,
-                                dist: p.dist,
-                                mu,
-                                t: [Vector3::zeros(); 2],
-                            });
+                                p.dist,
+                            ));
                         }
                     }
                 }
@@ -264,6 +258,32 @@ struct Pair {
     mu: f64,
     /// Part tags of A's and B's feature ids.
     tags: [u32; 2],
+}
+
+impl Pair {
+    /// A contact point of this pair.
+    fn point(
+        &self,
+        features: [u32; 2],
+        pa: Vector3<f64>,
+        pb: Vector3<f64>,
+        n: Vector3<f64>,
+        dist: f64,
+    ) -> ContactPoint {
+        ContactPoint {
+            ca: self.ca,
+            cb: self.cb,
+            a: self.a,
+            b: self.b,
+            features,
+            pa,
+            pb,
+            n,
+            dist,
+            mu: self.mu,
+            t: [Vector3::zeros(); 2],
+        }
+    }
 }
 
 /// Contact points of a half-space against a ball or a polygonal-feature shape (either order);
@@ -288,19 +308,7 @@ fn halfspace_points(
         let (pa, pb, normal, [fa, fb]) =
             if flipped { (p_other, p_plane, -n, [fid, face]) } else { (p_plane, p_other, n, [face, fid]) };
         let features = [fa | pair.tags[0], fb | pair.tags[1]];
-        out.push(ContactPoint {
-            ca: pair.ca,
-            cb: pair.cb,
-            a: pair.a,
-            b: pair.b,
-            features,
-            pa: from_vec(pa),
-            pb: from_vec(pb),
-            n: from_vec(normal),
-            dist: gap,
-            mu: pair.mu,
-            t: [Vector3::zeros(); 2],
-        });
+        out.push(pair.point(features, from_vec(pa), from_vec(pb), from_vec(normal), gap));
     };
     if let Some(ball) = other.as_ball() {
         let c = po.translation;
@@ -473,19 +481,7 @@ fn terrain_points(
             } else {
                 [triangle_feature(p.fid1.0, triangle), p.fid2.0 | pair.tags[1]]
             };
-            out.push(ContactPoint {
-                ca: pair.ca,
-                cb: pair.cb,
-                a: pair.a,
-                b: pair.b,
-                features,
-                pa,
-                pb,
-                n,
-                dist: p.dist,
-                mu: pair.mu,
-                t: [Vector3::zeros(); 2],
-            });
+            out.push(pair.point(features, pa, pb, n, p.dist));
         }
     }
     true
