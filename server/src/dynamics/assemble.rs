@@ -156,7 +156,7 @@ impl Assembler {
             }
         }
 
-        // A, row by row (upper triangle computed, both emitted).
+        // A, row by row: the upper triangle, rows in order, columns sorted.
         self.acc.clear();
         self.acc.resize(m, 0.0);
         self.stamp.clear();
@@ -183,13 +183,11 @@ impl Assembler {
                     self.acc[j] += v;
                 }
             }
+            // Row i of the upper triangle, columns sorted: what `Mlcp::assign_upper` takes.
+            self.touched.sort_unstable();
             for &j in &self.touched {
-                if j == i {
-                    self.triplets.push((i, i, self.acc[i] + r.compliance * inv_h2));
-                } else {
-                    self.triplets.push((i, j, self.acc[j]));
-                    self.triplets.push((j, i, self.acc[j]));
-                }
+                let v = if j == i { self.acc[i] + r.compliance * inv_h2 } else { self.acc[j] };
+                self.triplets.push((i, j, v));
             }
         }
     }
@@ -198,7 +196,7 @@ impl Assembler {
     /// assembled island, with the warm start in `lambda0`/`index0` when `warm` is set.
     pub fn fill_mlcp(&mut self, problem: &mut Mlcp, warm: bool) -> Result<(), MlcpError> {
         let m = self.b.len();
-        problem.assign(m, &mut self.triplets, &self.b, &self.lo, &self.hi, &self.findex)?;
+        problem.assign_upper(m, &self.triplets, &self.b, &self.lo, &self.hi, &self.findex)?;
         if warm {
             problem.set_warm_start(Some(&self.lambda0), Some(&self.index0))?;
         }

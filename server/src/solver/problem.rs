@@ -116,6 +116,21 @@ pub enum MlcpError {
         /// The diagonal value.
         value: f64,
     },
+    /// An upper-triangle entry list ([`SymCsr::assign_from_upper`]) with an entry below the
+    /// diagonal, out of `(row, col)` order, or repeated.
+    #[error("A[{row},{col}]: upper-triangle entries must have row ≤ col, sorted, each once")]
+    NotUpperSorted {
+        /// Row of the entry.
+        row: usize,
+        /// Column of the entry.
+        col: usize,
+    },
+    /// An upper-triangle entry list without this diagonal entry.
+    #[error("A[{index},{index}] is missing")]
+    MissingDiagonal {
+        /// The index.
+        index: usize,
+    },
     /// A sparse entry given twice.
     #[error("A[{row},{col}] is given more than once")]
     DuplicateEntry {
@@ -337,6 +352,79 @@ impl SymCsr {
         }
         self.n = n;
         Ok(true)
+    }
+
+    /// Refills the matrix (in place, reusing its buffers) from its upper triangle: entries
+    /// `(i, j, a_ij)` with `i ≤ j`, sorted by `(i, j)`, each once, every diagonal entry present —
+    /// what the dynamics assembler emits. The lower triangle is the mirror, so no symmetry check
+    /// is needed, and one counting pass builds rows with sorted columns: row `j` receives its
+    /// mirrored entries `(j, i)`, `i < j`, in increasing `i` before its own upper entries. On error
+    /// the matrix is left empty.
+    pub fn assign_from_upper(&mut self, n: usize, upper: &[(usize, usize, f64)]) -> Result<(), MlcpError> {
+        let result = self.assign_upper_inner(n, upper);
+        if result.is_err() {
+            self.n = 0;
+            self.row_ptr.clear();
+            self.row_ptr.push(0);
+            self.col.clear();
+            self.val.clear();
+        }
+        result
+    }
+
+    fn assign_upper_inner(&mut self, n: usize, upper: &[(usize, usize, f64)]) -> Result<(), MlcpError> {
+        self.row_ptr.clear();
+        self.row_ptr.resize(n + 1, 0);
+        // Validation and counts; rows must start with their diagonal entry.
+        let mut prev: Option<(usize, usize)> = None;
+        let mut next_row = 0;
+        for &(i, j, v) in upper {
+            if i >= n || j >= n {
+                return Err(MlcpError::EntryOutOfRange { row: i, col: j, n });
+            }
+            if !v.is_finite() {
+                return Err(MlcpError::NonFiniteMatrix { row: i, col: j, value: v });
+            }
+            if j < i || prev.is_some_and(|p| p >= (i, j)) {
+                return Err(MlcpError::NotUpperSorted { row: i, col: j });
+            }
+            if prev.is_none_or(|p| p.0 != i) {
+                if i != next_row || j != i {
+                    return Err(MlcpError::MissingDiagonal { index: next_row });
+                }
+                next_row += 1;
+            }
+            prev = Some((i, j));
+            self.row_ptr[i + 1] += 1;
+            if j != i {
+                self.row_ptr[j + 1] += 1;
+            }
+        }
+        if next_row != n {
+            return Err(MlcpError::MissingDiagonal { index: next_row });
+        }
+        for i in 0..n {
+            self.row_ptr[i + 1] += self.row_ptr[i];
+        }
+        let nnz = self.row_ptr[n];
+        self.col.clear();
+        self.col.resize(nnz, 0);
+        self.val.clear();
+        self.val.resize(nnz, 0.0);
+        self.next.clear();
+        self.next.extend_from_slice(&self.row_ptr[..n]);
+        for &(i, j, v) in upper {
+            let k = self.next[i];
+            (self.col[k], self.val[k]) = (j, v);
+            self.next[i] += 1;
+            if j != i {
+                let k = self.next[j];
+                (self.col[k], self.val[k]) = (i, v);
+                self.next[j] += 1;
+            }
+        }
+        self.n = n;
+        self.check_diagonal()
     }
 
     /// A diagonal matrix.
@@ -597,9 +685,33 @@ impl Mlcp {
         hi: &[f64],
         findex: &[Option<usize>],
     ) -> Result<(), MlcpError> {
+        self.assign_with(n, |a| a.assign_from_triplets(n, triplets), b, lo, hi, findex)
+    }
+
+    /// [`Mlcp::assign`] with `A` given by its sorted upper triangle ([`SymCsr::assign_from_upper`]).
+    pub fn assign_upper(
+        &mut self,
+        n: usize,
+        upper: &[(usize, usize, f64)],
+        b: &[f64],
+        lo: &[f64],
+        hi: &[f64],
+        findex: &[Option<usize>],
+    ) -> Result<(), MlcpError> {
+        self.assign_with(n, |a| a.assign_from_upper(n, upper), b, lo, hi, findex)
+    }
+
+    fn assign_with(
+        &mut self,
+        n: usize,
+        fill_a: impl FnOnce(&mut SymCsr) -> Result<(), MlcpError>,
+        b: &[f64],
+        lo: &[f64],
+        hi: &[f64],
+        findex: &[Option<usize>],
+    ) -> Result<(), MlcpError> {
         self.clear_warm_start();
-        let result =
-            self.a.assign_from_triplets(n, triplets).and_then(|()| validate_vectors(n, b, lo, hi, findex));
+        let result = fill_a(&mut self.a).and_then(|()| validate_vectors(n, b, lo, hi, findex));
         match result {
             Ok(nub) => {
                 self.nub = nub;
@@ -854,6 +966,47 @@ mod tests {
 
     fn spd2() -> SymCsr {
         SymCsr::from_dense_row_major(2, &[2.0, 1.0, 1.0, 2.0]).unwrap()
+    }
+
+    /// The upper-triangle path equals the general triplet path on random sparse symmetric
+    /// matrices, and refuses entries below the diagonal, out of order, repeated, or a missing
+    /// diagonal, leaving the matrix empty.
+    #[test]
+    fn upper_triangle_assignment_equals_the_triplet_path() {
+        use rand::{RngExt, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(7);
+        for n in [1usize, 2, 5, 40, 120] {
+            let mut upper = Vec::new();
+            for i in 0..n {
+                upper.push((i, i, rng.random_range(1.0..2.0)));
+                for j in i + 1..n {
+                    if rng.random_range(0.0..1.0) < 0.2 {
+                        upper.push((i, j, rng.random_range(-0.1..0.1)));
+                    }
+                }
+            }
+            let mut full: Vec<_> = upper.iter().flat_map(|&(i, j, v)| [(i, j, v), (j, i, v)]).collect();
+            full.dedup();
+            let reference = SymCsr::from_triplets(n, &full).unwrap();
+            let mut a = SymCsr::default();
+            a.assign_from_upper(n, &upper).unwrap();
+            assert_eq!(a, reference, "n = {n}");
+        }
+        let mut a = SymCsr::default();
+        let bad: [&[(usize, usize, f64)]; 4] = [
+            &[(0, 0, 1.0), (1, 0, 0.5), (1, 1, 1.0)],
+            &[(0, 0, 1.0), (0, 1, 0.5), (0, 1, 0.5), (1, 1, 1.0)],
+            &[(0, 1, 0.5), (0, 0, 1.0), (1, 1, 1.0)],
+            &[(0, 0, 1.0), (0, 1, 0.5)],
+        ];
+        for (k, t) in bad.iter().enumerate() {
+            let e = a.assign_from_upper(2, t).unwrap_err();
+            assert!(
+                matches!(e, MlcpError::NotUpperSorted { .. } | MlcpError::MissingDiagonal { .. }),
+                "case {k}: {e}"
+            );
+            assert_eq!(a.n(), 0);
+        }
     }
 
     #[test]
