@@ -232,6 +232,11 @@ impl SymCsr {
         triplets: &mut [(usize, usize, f64)],
     ) -> Result<(), MlcpError> {
         let result = self.assign_inner(n, triplets);
+        self.emptied_on_error(result)
+    }
+
+    /// Leaves the matrix empty (`n = 0`) when `result` is an error; passes `result` on.
+    fn emptied_on_error(&mut self, result: Result<(), MlcpError>) -> Result<(), MlcpError> {
         if result.is_err() {
             self.n = 0;
             self.row_ptr.clear();
@@ -362,14 +367,7 @@ impl SymCsr {
     /// the matrix is left empty.
     pub fn assign_from_upper(&mut self, n: usize, upper: &[(usize, usize, f64)]) -> Result<(), MlcpError> {
         let result = self.assign_upper_inner(n, upper);
-        if result.is_err() {
-            self.n = 0;
-            self.row_ptr.clear();
-            self.row_ptr.push(0);
-            self.col.clear();
-            self.val.clear();
-        }
-        result
+        self.emptied_on_error(result)
     }
 
     fn assign_upper_inner(&mut self, n: usize, upper: &[(usize, usize, f64)]) -> Result<(), MlcpError> {
