@@ -196,15 +196,7 @@ pub fn run(common: &Common, args: &Args) -> Result<ExitCode> {
     if args.axes.iter().any(|a| !(a.is_finite() && (-1.0..=1.0).contains(a))) {
         bail!("axis values must be in [-1, 1]");
     }
-    let link = match args.transport {
-        TransportKind::Zenoh => Some(common.open_zenoh()?),
-        TransportKind::Iceoryx2 => None,
-    };
-    let scene = crate::util::scene_best_effort(
-        common,
-        link.as_ref(),
-        if link.is_some() { timeout } else { timeout.min(Duration::from_secs(1)) },
-    );
+    let (link, scene) = crate::util::input_link(common, args.transport, timeout)?;
     let layout = Layout::from_scene(scene.as_ref());
     let mut pad = if scripted || args.no_gamepad { None } else { pad::Pad::open() };
     let pad_name = pad.as_ref().and_then(|p| p.name());

@@ -215,16 +215,8 @@ fn latest_counters(stream: &Stream, wait: Duration) -> Option<Counters> {
 pub fn run(common: &Common, args: &Args) -> Result<ExitCode> {
     let timeout = common.timeout_or(5.0);
     let world = common.world()?;
-    // Connections: Zenoh for the scene (and the inputs on the zenoh transport).
-    let link = match args.transport {
-        TransportKind::Zenoh => Some(common.open_zenoh()?),
-        TransportKind::Iceoryx2 => None,
-    };
-    let scene = crate::util::scene_best_effort(
-        common,
-        link.as_ref(),
-        if link.is_some() { timeout } else { timeout.min(Duration::from_secs(1)) },
-    );
+    // Zenoh for the scene (and for the inputs on the zenoh transport).
+    let (link, scene) = crate::util::input_link(common, args.transport, timeout)?;
     let mut cmd = build(&args.what, scene.as_ref())?;
     stamp(&mut cmd, 1, 1);
     cmd.validate().map_err(|e| anyhow!("invalid command: {e}"))?;

@@ -96,6 +96,23 @@ pub fn scene_best_effort(
     }
 }
 
+/// The connection of an input-sending command (`drive`, `send`): a Zenoh link when inputs go over
+/// Zenoh, and the scene description — over that link, or over a session of its own (waiting at
+/// most 1 s) when inputs go over iceoryx2.
+pub fn input_link(
+    common: &Common,
+    transport: crate::net::TransportKind,
+    timeout: Duration,
+) -> anyhow::Result<(Option<ZenohLink>, Option<msgs::SceneDescription>)> {
+    let link = match transport {
+        crate::net::TransportKind::Zenoh => Some(common.open_zenoh()?),
+        crate::net::TransportKind::Iceoryx2 => None,
+    };
+    let wait = if link.is_some() { timeout } else { timeout.min(Duration::from_secs(1)) };
+    let scene = scene_best_effort(common, link.as_ref(), wait);
+    Ok((link, scene))
+}
+
 /// A body's display name.
 pub fn body_name(scene: Option<&msgs::SceneDescription>, id: u32) -> String {
     scene.and_then(|s| s.body(id)).map_or_else(|| format!("body{id}"), |b| b.name.clone())
