@@ -167,8 +167,6 @@ pub struct SymCsr {
     src: Vec<usize>,
     /// Scratch of [`SymCsr::assign_from_triplets`] (not part of the value).
     sym: Vec<(usize, usize, f64)>,
-    /// Scratch of [`SymCsr::assign_from_triplets`]: the diagonal of the input (not part of the value).
-    diag: Vec<f64>,
 }
 
 impl PartialEq for SymCsr {
@@ -262,9 +260,6 @@ impl SymCsr {
                 return Err(MlcpError::DuplicateEntry { row: w[0].0, col: w[0].1 });
             }
         }
-        if self.assign_paired(n, triplets)? {
-            return self.check_diagonal();
-        }
         let entries: &[(usize, usize, f64)] = triplets;
         let find = |i: usize, j: usize| -> Option<f64> {
             entries.binary_search_by_key(&(i, j), |&(a, b, _)| (a, b)).ok().map(|k| entries[k].2)
@@ -309,54 +304,6 @@ impl SymCsr {
         }
         self.sym = sym;
         self.check_diagonal()
-    }
-
-    /// The fast path of [`SymCsr::assign_from_triplets`] for the usual input of an assembler: sorted,
-    /// duplicate-free triplets in which every off-diagonal entry has its mirror and every diagonal
-    /// entry is present. The sorted triplets are then the CSR arrays themselves: one pass finds the
-    /// row starts, a binary search within row `j` finds the mirror of `(i, j)`, and no second sort
-    /// is needed. Returns `Ok(false)` (nothing assigned) when the input is not of that shape.
-    fn assign_paired(&mut self, n: usize, t: &[(usize, usize, f64)]) -> Result<bool, MlcpError> {
-        self.row_ptr.clear();
-        self.row_ptr.resize(n + 1, 0);
-        for &(i, _, _) in t {
-            self.row_ptr[i + 1] += 1;
-        }
-        for i in 0..n {
-            self.row_ptr[i + 1] += self.row_ptr[i];
-        }
-        self.diag.clear();
-        self.diag.resize(n, f64::NAN);
-        for &(i, j, v) in t {
-            if i == j {
-                self.diag[i] = v;
-            }
-        }
-        if self.diag.iter().any(|d| d.is_nan()) {
-            return Ok(false);
-        }
-        let row = |j: usize| &t[self.row_ptr[j]..self.row_ptr[j + 1]];
-        // First check that every mirror exists (nothing written yet), then fill.
-        for &(i, j, _) in t {
-            if i != j && row(j).binary_search_by_key(&i, |&(_, c, _)| c).is_err() {
-                return Ok(false);
-            }
-        }
-        self.col.clear();
-        self.val.clear();
-        for &(i, j, aij) in t {
-            self.col.push(j);
-            if i == j {
-                self.val.push(aij);
-                continue;
-            }
-            let k = row(j).binary_search_by_key(&i, |&(_, c, _)| c).expect("checked above");
-            let aji = row(j)[k].2;
-            check_symmetric(i, j, aij, aji, self.diag[i], self.diag[j])?;
-            self.val.push(0.5 * (aij + aji));
-        }
-        self.n = n;
-        Ok(true)
     }
 
     /// Refills the matrix (in place, reusing its buffers) from its upper triangle: entries
