@@ -215,6 +215,7 @@ pub fn run_scene_observed(
     let every = opts.every.max(1);
     let steps = (duration / h).round() as u64;
     let path_str = |p: &Path| p.display().to_string();
+    let (stats_path, poses_path) = (opts.stats.as_deref().map(path_str), opts.poses.as_deref().map(path_str));
     let mut stats_w = opts.stats.as_deref().map(csv_writer).transpose()?;
     let mut poses_w = opts.poses.as_deref().map(csv_writer).transpose()?;
     if let Some(dir) = &opts.dump_mlcp {
@@ -281,8 +282,7 @@ pub fn run_scene_observed(
         let time = world.time();
         record_step(world, &mut sum, &mut acc);
         on_step(world);
-        if let Some(w) = stats_w.as_mut() {
-            let path = opts.stats.as_deref().map(path_str).unwrap_or_default();
+        if let (Some(w), Some(path)) = (stats_w.as_mut(), &stats_path) {
             for s in world.island_stats() {
                 let row = StatsRow {
                     step,
@@ -305,8 +305,7 @@ pub fn run_scene_observed(
                 w.serialize(row).map_err(|source| RunError::Csv { path: path.clone(), source })?;
             }
         }
-        if let Some(w) = poses_w.as_mut() {
-            let path = opts.poses.as_deref().map(path_str).unwrap_or_default();
+        if let (Some(w), Some(path)) = (poses_w.as_mut(), &poses_path) {
             for b in world.bodies().iter().filter(|b| b.is_dynamic()) {
                 let (x, q) = (b.position(), b.orientation());
                 let row = PoseRow {
