@@ -9,6 +9,7 @@ use std::process::ExitCode;
 
 use anyhow::Context;
 use clap::{Parser, Subcommand};
+use pivotsim_server::scene::SceneOverride;
 use pivotsim_server::solver::{OrderingKind, Solver, SolverOptions, Variant, io};
 
 /// Exact-contact multibody physics server (block principal pivoting with Cholesky downdates).
@@ -49,9 +50,17 @@ enum Command {
         /// With --dump-mlcp: every N-th step.
         #[arg(long, default_value_t = 60)]
         every: usize,
+        /// With --dump-mlcp: instead of every N-th step, the N hardest island solves of the run
+        /// (not converged first, then most pivot steps, then slowest), with their warm starts.
+        #[arg(long, default_value_t = 0)]
+        dump_hard: usize,
         /// Print the summary as one JSON object.
         #[arg(long)]
         json: bool,
+        /// Override a scene setting (repeatable): `contact_compliance=1e-10`, `max_pivot_steps=35`,
+        /// `body.hook.mass=70` (scenes/README.md, "Overriding settings").
+        #[arg(long = "set", value_name = "KEY=VALUE")]
+        set: Vec<SceneOverride>,
     },
     /// List the built-in scenes.
     Scenes,
@@ -215,7 +224,7 @@ fn main() -> ExitCode {
         Some(Command::Solve { file, variant, max_steps, ordering, tol, solution, deletion_error, json }) => {
             solve(&file, variant, max_steps, ordering, tol, solution, deletion_error, json)
         }
-        Some(Command::Run { scene, duration, variant, stats, poses, dump_mlcp, every, json }) => {
+        Some(Command::Run { scene, duration, variant, stats, poses, dump_mlcp, every, dump_hard, json, set }) => {
             let opts = pivotsim_server::run::RunOptions {
                 duration,
                 variant,
@@ -223,9 +232,10 @@ fn main() -> ExitCode {
                 poses,
                 dump_mlcp,
                 every,
+                dump_hard,
                 progress: !json,
             };
-            run(&scene, &opts, json)
+            run(&scene, &set, &opts, json)
         }
         Some(Command::Scenes) => {
             for b in pivotsim_server::scene::BUILTIN {
@@ -250,8 +260,13 @@ fn main() -> ExitCode {
     }
 }
 
-fn run(scene: &str, opts: &pivotsim_server::run::RunOptions, json: bool) -> anyhow::Result<()> {
-    let mut sc = pivotsim_server::scene::load(scene)?;
+fn run(
+    scene: &str,
+    overrides: &[SceneOverride],
+    opts: &pivotsim_server::run::RunOptions,
+    json: bool,
+) -> anyhow::Result<()> {
+    let mut sc = pivotsim_server::scene::load_with(scene, overrides)?;
     let summary = pivotsim_server::run::run_scene(&mut sc, opts)?;
     if json {
         println!("{}", serde_json::to_string(&summary)?);

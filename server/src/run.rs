@@ -40,6 +40,10 @@ pub struct RunOptions {
     pub dump_mlcp: Option<PathBuf>,
     /// Dump every N-th step (≥ 1).
     pub every: usize,
+    /// With `dump_mlcp`: instead of every N-th step, keep the N hardest island solves of the run
+    /// (those that did not converge first, then by pivot steps, then by solve time) and write them
+    /// at the end, each with the warm start the simulation gave it (`*-hardNN-step*-island*.txt`).
+    pub dump_hard: usize,
     /// Show a progress bar on a terminal.
     pub progress: bool,
 }
@@ -103,6 +107,14 @@ pub struct RunSummary {
     pub error: Option<String>,
     /// Island problems written by `--dump-mlcp`.
     pub dumped: usize,
+    /// Mean wall time of one island solve (µs), islands with rows.
+    pub mean_island_solve_us: f64,
+    /// Largest wall time of one island solve (µs).
+    pub max_island_solve_us: f64,
+    /// Island solves in which a safeguard (projected Newton, Murty, semismooth Newton) ran.
+    pub solves_fallback: u64,
+    /// Island solves stopped by the time budget (`max_solve_us`).
+    pub solves_budget: u64,
 }
 
 /// Why a run could not start or write its outputs.
@@ -186,6 +198,7 @@ struct Acc {
     step_us: f64,
     pivots: u64,
     solves: u64,
+    island_us: f64,
     tight_largest: f64,
 }
 
@@ -258,13 +271,18 @@ pub fn run_scene_observed(
         finite: true,
         error: None,
         dumped: 0,
+        mean_island_solve_us: 0.0,
+        max_island_solve_us: 0.0,
+        solves_fallback: 0,
+        solves_budget: 0,
     };
+    let mut hard = HardSolves::new(if opts.dump_mlcp.is_some() { opts.dump_hard } else { 0 });
     let mut acc = Acc { solve_us: Vec::with_capacity(steps as usize), ..Acc::default() };
     let start = Instant::now();
     let tick = (steps / 200).max(1);
     for n in 0..steps {
-        let dump = opts.dump_mlcp.is_some() && n % every as u64 == 0;
-        scene.world.set_capture_problems(dump);
+        let dump = opts.dump_mlcp.is_some() && hard.keep == 0 && n % every as u64 == 0;
+        scene.world.set_capture_problems(dump || hard.keep > 0);
         let t0 = Instant::now();
         match scene.step() {
             Ok(()) => {}
@@ -326,20 +344,19 @@ pub fn run_scene_observed(
         if let (true, Some(dir)) = (dump, &opts.dump_mlcp) {
             for (p, s) in world.captured_problems().iter().zip(world.island_stats()) {
                 let path = dir.join(format!("{}-step{:06}-island{}.txt", scene.name, step, s.island));
-                let f =
-                    File::create(&path).map_err(|source| RunError::Io { path: path_str(&path), source })?;
-                let mut out = BufWriter::new(f);
-                io::write_mlcp(p, &mut out)
-                    .and_then(|()| out.flush())
-                    .map_err(|source| RunError::Io { path: path_str(&path), source })?;
+                write_problem(&path, p)?;
                 sum.dumped += 1;
             }
         }
+        hard.offer(world);
         if n % tick == 0 {
             bar.set_position(n + 1);
         }
     }
     scene.world.set_capture_problems(false);
+    if let Some(dir) = &opts.dump_mlcp {
+        sum.dumped += hard.write(dir, &scene.name)?;
+    }
     bar.finish_and_clear();
     for (w, p) in [(stats_w.as_mut(), &opts.stats), (poses_w.as_mut(), &opts.poses)] {
         if let (Some(w), Some(p)) = (w, p) {
@@ -354,6 +371,7 @@ pub fn run_scene_observed(
     sum.mean_solve_us = acc.solve_us.iter().sum::<f64>() / n;
     sum.mean_step_us = acc.step_us / n;
     sum.mean_pivot_steps = acc.pivots as f64 / acc.solves.max(1) as f64;
+    sum.mean_island_solve_us = acc.island_us / acc.solves.max(1) as f64;
     sum.mean_tight_fraction = acc.tight_largest / n;
     acc.solve_us.sort_by(f64::total_cmp);
     if let Some(&max) = acc.solve_us.last() {
@@ -383,10 +401,14 @@ fn record_step(world: &World, sum: &mut RunSummary, acc: &mut Acc) {
         }
         acc.pivots += s.pivot_steps as u64;
         acc.solves += 1;
+        acc.island_us += s.solve_us;
+        sum.max_island_solve_us = sum.max_island_solve_us.max(s.solve_us);
+        sum.solves_fallback += s.fallback as u64;
         match s.status {
             SolveStatus::Converged => sum.solves_converged += 1,
             SolveStatus::Inexact => sum.solves_inexact += 1,
             SolveStatus::MaxSteps => sum.solves_max_steps += 1,
+            SolveStatus::Budget => sum.solves_budget += 1,
             _ => sum.solves_other += 1,
         }
     }
@@ -399,6 +421,55 @@ fn record_step(world: &World, sum: &mut RunSummary, acc: &mut Acc) {
         sum.max_body_speed_mps = sum.max_body_speed_mps.max(b.linvel().norm());
     }
     acc.solve_us.push(solve);
+}
+
+/// The hardest island solves of a run, kept for `--dump-hard` (allocates: offline use only).
+struct HardSolves {
+    keep: usize,
+    /// (hardness, step, island, problem), hardest first.
+    kept: Vec<((bool, usize, f64), u64, usize, crate::solver::Mlcp)>,
+}
+
+impl HardSolves {
+    fn new(keep: usize) -> Self {
+        HardSolves { keep, kept: Vec::new() }
+    }
+
+    /// Offers the islands of the step just taken (their problems were captured).
+    fn offer(&mut self, world: &World) {
+        if self.keep == 0 {
+            return;
+        }
+        for (p, s) in world.captured_problems().iter().zip(world.island_stats()) {
+            let key = (s.status != SolveStatus::Converged, s.pivot_steps, s.solve_us);
+            let harder = |a: &(bool, usize, f64), b: &(bool, usize, f64)| {
+                (a.0, a.1).cmp(&(b.0, b.1)).then(a.2.total_cmp(&b.2))
+            };
+            if self.kept.len() == self.keep
+                && self.kept.last().is_some_and(|l| harder(&key, &l.0) != std::cmp::Ordering::Greater)
+            {
+                continue;
+            }
+            let at = self.kept.partition_point(|k| harder(&k.0, &key) == std::cmp::Ordering::Greater);
+            self.kept.insert(at, (key, world.steps(), s.island, p.clone()));
+            self.kept.truncate(self.keep);
+        }
+    }
+
+    /// Writes the kept problems; returns how many.
+    fn write(&self, dir: &Path, scene: &str) -> Result<usize, RunError> {
+        for (rank, (_, step, island, p)) in self.kept.iter().enumerate() {
+            let path = dir.join(format!("{scene}-hard{rank:02}-step{step:06}-island{island}.txt"));
+            write_problem(&path, p)?;
+        }
+        Ok(self.kept.len())
+    }
+}
+
+fn write_problem(path: &Path, p: &crate::solver::Mlcp) -> Result<(), RunError> {
+    let err = |source| RunError::Io { path: path.display().to_string(), source };
+    let mut out = BufWriter::new(File::create(path).map_err(err)?);
+    io::write_mlcp(p, &mut out).and_then(|()| out.flush()).map_err(err)
 }
 
 /// The summary as text lines.

@@ -21,6 +21,8 @@ pub struct IslandStats {
     pub status: SolveStatus,
     /// Pivot steps (exact variants).
     pub pivot_steps: usize,
+    /// A safeguard of the pivoting ran (projected Newton, Murty, semismooth Newton).
+    pub fallback: bool,
     /// Sweeps (PGS).
     pub iterations: usize,
     /// Tight rows in the solution.

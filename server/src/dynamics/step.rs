@@ -274,6 +274,7 @@ impl StepWorkspace {
             variant: s.variant,
             status: s.status,
             pivot_steps: s.pivot_steps,
+            fallback: s.fallback,
             iterations: s.iterations,
             tight: s.tight,
             residual: s.residual,

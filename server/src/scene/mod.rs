@@ -9,6 +9,7 @@
 //! | `terrain.rs` | terrain shape types (heightfield, stairs, hills, trimesh) and the material table |
 //! | `controls.rs` | actuators, joystick mapping, timeline |
 //! | `builtin.rs` | the scenes shipped in `scenes/`, embedded in the binary |
+//! | `overrides.rs` | `--set KEY=VALUE`: settings overridden on the command line |
 //!
 //! Loading is all or nothing: the world is built in a local and handed out only when every table
 //! passed, so a bad scene never half-loads. Every error names the file, line and column of the
@@ -35,6 +36,7 @@ mod build;
 mod builtin;
 mod controls;
 mod format;
+mod overrides;
 mod terrain;
 
 use std::fmt;
@@ -43,6 +45,7 @@ use std::path::Path;
 use thiserror::Error;
 
 pub use builtin::{BUILTIN, BuiltinScene, builtin};
+pub use overrides::{OverrideError, SceneOverride};
 pub use controls::{
     Actuator, ActuatorKind, ActuatorTarget, AxisMode, ButtonAction, Controls, InputError, JoyAxis, JoyButton,
     JoystickError, JoystickMap, Neutral, SceneEvent, Script, ScriptEntry,
@@ -105,6 +108,14 @@ pub enum SceneError {
         item: String,
         /// The dynamics' typed error.
         source: Box<ModelError>,
+    },
+    /// A `--set KEY=VALUE` override that names nothing in the scene.
+    #[error("{file}: --set {source}")]
+    Override {
+        /// The scene.
+        file: String,
+        /// What is wrong with the override.
+        source: OverrideError,
     },
     /// Neither a built-in scene nor a readable file.
     #[error("no built-in scene `{name}` and no such file (built-in: {known})")]
@@ -193,12 +204,27 @@ pub fn load_file(path: &Path) -> Result<Scene, SceneError> {
 
 /// Loads a built-in scene by name, or else a file by path.
 pub fn load(name_or_path: &str) -> Result<Scene, SceneError> {
+    load_with(name_or_path, &[])
+}
+
+/// Loads a built-in scene by name, or else a file by path, with settings overridden
+/// (`--set KEY=VALUE`, see [`SceneOverride`]); the overridden values pass the same checks as
+/// values written in the file.
+pub fn load_with(name_or_path: &str, overrides: &[SceneOverride]) -> Result<Scene, SceneError> {
+    let with = |file: String, text: &str| {
+        let text = overrides::apply(text, overrides)
+            .map_err(|source| SceneError::Override { file: file.clone(), source })?;
+        load_str(&file, &text)
+    };
     if let Some(b) = builtin(name_or_path) {
-        return load_str(&format!("builtin:{}", b.name), b.text);
+        return with(format!("builtin:{}", b.name), b.text);
     }
     let path = Path::new(name_or_path);
     if path.exists() {
-        return load_file(path);
+        let file = path.display().to_string();
+        let text =
+            std::fs::read_to_string(path).map_err(|source| SceneError::Io { file: file.clone(), source })?;
+        return with(file, &text);
     }
     Err(SceneError::Unknown {
         name: name_or_path.to_string(),

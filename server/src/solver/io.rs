@@ -12,6 +12,9 @@
 //! lo       n numbers  ('-inf' allowed)
 //! hi       n numbers  ('inf' allowed)
 //! findex   n integers (-1 = none, j >= 0 = friction row coupled to normal row j)
+//! [warm    optional warm-start section: the word `warm`, then
+//!  lambda0 n numbers
+//!  index0  n letters: F (free), L (at lo), U (at hi)]
 //! ```
 //!
 //! Numbers are anything Rust's `f64` parser accepts, which includes `inf`, `+inf`, `-inf`,
@@ -23,8 +26,11 @@
 //! [`MAX_DENSE_ENTRIES`] numbers.
 //!
 //! Writers use `{:e}` (shortest representation that round-trips, so `write → parse` is exact) and
-//! pick the sparse form when fewer than a quarter of the `n²` entries are stored. A warm start
-//! (`lambda0`, `index0`) is not part of the format and is not written.
+//! pick the sparse form when fewer than a quarter of the `n²` entries are stored. A problem with a
+//! warm start (`lambda0`, `index0`: the previous step's impulses and index set, as the simulation
+//! hands them to the solver) is written with the optional `warm` section; files without it read as
+//! before (the section is backwards compatible: it is the only thing that may follow `findex`). A
+//! warm section with only `lambda0` or only `index0` is not written; on reading, both are required.
 //!
 //! Solution files: `n` numbers, one per line, 17 significant digits (`{:.16e}`).
 
@@ -33,7 +39,7 @@ use std::path::{Path, PathBuf};
 
 use thiserror::Error;
 
-use super::problem::{Mlcp, MlcpError, SymCsr};
+use super::problem::{IndexState, Mlcp, MlcpError, SymCsr};
 
 /// Largest problem size a reader accepts.
 pub const MAX_N: usize = 1_000_000;
@@ -356,10 +362,45 @@ pub fn parse_mlcp(text: &str) -> Result<Mlcp, MlcpFileError> {
     let lo = read_vector(&mut lx, n, "lo")?;
     let hi = read_vector(&mut lx, n, "hi")?;
     let findex = read_findex(&mut lx, n)?;
+    let warm = match lx.next_token() {
+        None => None,
+        Some(t) if t.text == "warm" => Some(read_warm(&mut lx, n)?),
+        Some(t) => {
+            return Err(t.error(format!(
+                "trailing data after findex: found {} (only a `warm` section may follow)",
+                t.quoted()
+            )));
+        }
+    };
     if let Some(t) = lx.next_token() {
-        return Err(t.error(format!("trailing data after findex: found {}", t.quoted())));
+        return Err(t.error(format!("trailing data after the warm section: found {}", t.quoted())));
     }
-    Ok(Mlcp::new(a, b, lo, hi, findex)?)
+    let mut p = Mlcp::new(a, b, lo, hi, findex)?;
+    if let Some((l0, s0)) = warm {
+        p.set_warm_start(Some(&l0), Some(&s0))?;
+    }
+    Ok(p)
+}
+
+/// The `warm` section after its keyword: `n` numbers `λ₀`, then `n` letters F/L/U.
+fn read_warm(lx: &mut Lexer<'_>, n: usize) -> Result<(Vec<f64>, Vec<IndexState>), MlcpFileError> {
+    let lambda0 = read_vector(lx, n, "lambda0")?;
+    let mut index0 = Vec::with_capacity(n.min(lx.max_tokens_left()));
+    for i in 0..n {
+        let t = lx.expect(|| format!("expected {n} letters F/L/U of index0, found {i}"))?;
+        index0.push(match t.text {
+            "F" => IndexState::Free,
+            "L" => IndexState::Lower,
+            "U" => IndexState::Upper,
+            _ => {
+                return Err(t.error(format!(
+                    "expected F (free), L (at lo) or U (at hi) for index0[{i}], found {}",
+                    t.quoted()
+                )));
+            }
+        });
+    }
+    Ok((lambda0, index0))
 }
 
 /// Reads and parses a problem file.
@@ -434,7 +475,25 @@ pub fn write_mlcp<W: Write>(p: &Mlcp, out: &mut W) -> std::io::Result<()> {
         }
     }
     line.push('\n');
-    out.write_all(line.as_bytes())
+    out.write_all(line.as_bytes())?;
+    if let (Some(l0), Some(s0)) = (p.lambda0(), p.index0()) {
+        line.clear();
+        line.push_str("warm\n");
+        push_numbers(&mut line, l0.iter().copied());
+        for (k, s) in s0.iter().enumerate() {
+            if k > 0 {
+                line.push(' ');
+            }
+            line.push(match s {
+                IndexState::Free => 'F',
+                IndexState::Lower => 'L',
+                IndexState::Upper => 'U',
+            });
+        }
+        line.push('\n');
+        out.write_all(line.as_bytes())?;
+    }
+    Ok(())
 }
 
 /// Writes a solution: one number per line, 17 significant digits (`{:.16e}`), which round-trips
@@ -546,6 +605,35 @@ mod tests {
         assert_eq!(p.lo(), &[0.0, -0.1, -0.1]);
         assert_eq!(p.hi(), &[INF, 0.1, 0.1]);
         assert_eq!(p.findex(), &[None, Some(0), Some(0)]);
+    }
+
+    #[test]
+    fn warm_section_round_trips_and_is_optional() {
+        let base = "3 0\n15.0 -1.0 -2.0\n-1.0 14.0 1.0\n-2.0 1.0 16.0\n1.0 -2.0 -3.0\n0.0 -0.1 -0.1\ninf 0.1 0.1\n-1 0 0\n";
+        // Without the section: no warm start.
+        let cold = parse_mlcp(base).unwrap();
+        assert!(cold.lambda0().is_none() && cold.index0().is_none());
+        // With it: read, and written back unchanged.
+        let p = parse_mlcp(&format!("{base}warm\n0.25 -0.1 0\nF L U\n")).unwrap();
+        assert_eq!(p.lambda0(), Some(&[0.25, -0.1, 0.0][..]));
+        assert_eq!(p.index0(), Some(&[IndexState::Free, IndexState::Lower, IndexState::Upper][..]));
+        let text = written(&p);
+        assert!(text.contains("\nwarm\n"), "{text}");
+        let again = parse_mlcp(&text).unwrap();
+        assert_eq!(again, p);
+        assert_eq!(again.lambda0(), p.lambda0());
+        assert_eq!(again.index0(), p.index0());
+        // A cold problem writes no section.
+        assert!(!written(&cold).contains("warm"));
+        // Errors: a bad letter, a short section, data after it.
+        let (_, _, m) = parse_error(&format!("{base}warm\n0 0 0\nF X U\n"));
+        assert!(m.contains("index0[1]") && m.contains("'X'"), "{m}");
+        let (_, _, m) = parse_error(&format!("{base}warm\n0 0 0\nF L\n"));
+        assert!(m.contains("expected 3 letters F/L/U of index0, found 2"), "{m}");
+        let (_, _, m) = parse_error(&format!("{base}warm\n0 0\n"));
+        assert!(m.contains("lambda0"), "{m}");
+        let (_, _, m) = parse_error(&format!("{base}warm\n0 0 0\nF F F\nmore\n"));
+        assert!(m.contains("trailing data after the warm section"), "{m}");
     }
 
     #[test]
@@ -800,7 +888,7 @@ mod tests {
         // Trailing garbage.
         let (l, c, m) = parse_error(&format!("{HEAD}1 1\n0 0\ninf inf\n-1 -1\n\n# ok\n  junk\n"));
         assert_eq!((l, c), (11, 3));
-        assert_eq!(m, "trailing data after findex: found 'junk'");
+        assert_eq!(m, "trailing data after findex: found 'junk' (only a `warm` section may follow)");
         // Sparse index out of range and non-integer index.
         let (l, c, m) = parse_error("2 0 2\n0 0 1\n1 2 1\n1 1\n0 0\n1 1\n-1 -1\n");
         assert_eq!((l, c), (3, 3));

@@ -12,8 +12,10 @@ pub enum SolveStatus {
     /// The index set settled but the residual stayed above the tolerance (regularized pivots of a
     /// semidefinite `A`, or conditioning beyond double precision).
     Inexact,
-    /// The step cap was reached; `λ` is the iterate with the smallest residual seen.
+    /// The step cap was reached; `λ` is the best feasible iterate (see the solver's docs).
     MaxSteps,
+    /// The time budget (`max_solve_us`) was spent first; `λ` is the best feasible iterate.
+    Budget,
     /// The problem had no rows (or the output slice had the wrong length).
     Empty,
     /// A non-finite value appeared (numerically singular beyond regularization); `λ` is the best
@@ -27,6 +29,7 @@ impl SolveStatus {
         match self {
             SolveStatus::Converged => "converged",
             SolveStatus::MaxSteps => "max-steps",
+            SolveStatus::Budget => "budget",
             SolveStatus::Empty => "empty",
             SolveStatus::Inexact => "inexact",
             SolveStatus::NonFinite => "non-finite",
@@ -69,6 +72,9 @@ pub struct SolveStats {
     pub tight: usize,
     /// Whether a fallback (Murty or projected Newton) ran.
     pub fallback: bool,
+    /// The returned iterate had positive merit (it would have added energy) and was scaled
+    /// towards zero (`safe.rs`); only ever on a solve that did not converge.
+    pub energy_scaled: bool,
     /// Murty single-pivot steps taken.
     pub murty_steps: usize,
     /// Steps of the semismooth Newton fallback (stalled outer friction iteration).

@@ -40,6 +40,7 @@
 
 mod coupled;
 mod factor;
+mod safe;
 mod safeguard;
 
 use std::time::Instant;
@@ -188,6 +189,14 @@ pub struct Solver {
     center: Vec<f64>,
     prox_best: Vec<f64>,
     last_factor: FactorIn,
+    /// Every fixed box (rows without `findex`) contains 0 (`safe.rs`).
+    zero_feasible: bool,
+    /// Rounding scale of each tight row's `w` (`find_infeasible`).
+    wscale: Vec<f64>,
+    /// The solve must stop by then (time budget), if set.
+    deadline: Option<Instant>,
+    /// The deadline stopped the solve.
+    out_of_time: bool,
 }
 
 impl Solver {
@@ -204,6 +213,25 @@ impl Solver {
     /// Changes the options (e.g. the variant, live).
     pub fn set_options(&mut self, opts: SolverOptions) {
         self.opts = opts;
+    }
+
+    /// Sets the time by which the next solves must stop (`None`: only the step cap bounds them).
+    /// A solve checks it before every pivot step, so it overruns by at most one step; stopped
+    /// there, it returns its best safe iterate with status [`SolveStatus::Budget`].
+    pub fn set_deadline(&mut self, deadline: Option<Instant>) {
+        self.deadline = deadline;
+    }
+
+    /// Whether the solve must stop before another pivot step: the step cap, or the deadline.
+    pub(super) fn stop_now(&mut self) -> bool {
+        if self.stats.pivot_steps >= self.opts.max_steps {
+            return true;
+        }
+        if self.deadline.is_some_and(|d| Instant::now() >= d) {
+            self.out_of_time = true;
+            return true;
+        }
+        false
     }
 
     /// Statistics of the last solve.
@@ -282,6 +310,8 @@ impl Solver {
             self.hip[new] = p.hi()[old];
             self.fip[new] = p.findex()[old].map(|j| self.inv[j]);
         }
+        self.zero_feasible =
+            (0..m).all(|i| self.fip[i].is_some() || (self.lop[i] <= 0.0 && self.hip[i] >= 0.0));
         self.stats.ordering_us = us(t);
         self.max_diag = self.ap.max_diag();
 
@@ -299,6 +329,7 @@ impl Solver {
         self.tight_l.resize(m, false);
         self.l_valid = false;
         self.non_finite = false;
+        self.out_of_time = false;
         self.outer_hist = [0.0; OUTER_MEMORY];
         self.needs_prox = false;
         self.prox_shift = 0.0;
@@ -334,9 +365,10 @@ impl Solver {
         if !converged {
             self.lam.copy_from_slice(&self.best);
         }
-        // Final report against the true bounds, in the original order.
+        // Final report against the true bounds, in the original order, of a safe iterate.
         let t = Instant::now();
-        self.compute_w();
+        if std::env::var_os("PIVOTSIM_NO_SAFE").is_some() { self.compute_w(); } else {
+        self.stats.energy_scaled = self.make_safe(); }
         self.stats.solve_us += us(t);
         let (res, res_rel) = super::natural_residual(&self.lam, &self.w, &self.lop, &self.hip, &self.fip);
         self.stats.residual = res;
@@ -347,6 +379,8 @@ impl Solver {
             SolveStatus::Inexact
         } else if self.non_finite {
             SolveStatus::NonFinite
+        } else if self.out_of_time {
+            SolveStatus::Budget
         } else {
             SolveStatus::MaxSteps
         };
@@ -379,7 +413,7 @@ impl Solver {
         let mut outer_stall = 0;
         loop {
             if !solved_by_fallback {
-                if self.stats.pivot_steps >= self.opts.max_steps {
+                if self.stop_now() {
                     return false;
                 }
                 self.pivot_solve(variant);
@@ -579,21 +613,31 @@ impl Solver {
         moved
     }
 
-    /// Fills `infeasible` with the variables that violate eq. 4 against the frozen bounds.
+    /// Fills `infeasible` with the variables that violate eq. 4 against the frozen bounds. The
+    /// sign of `w_i` on a tight row is trusted beyond the rounding of its own sum,
+    /// `|w_i| > 1e-13 (|b_i| + Σ_j |A_ij λ_j|)`: a global scale (the largest diagonal times `‖λ‖∞`)
+    /// let a normal row of the forwarder sit at 0 with `w = −1.1e-5` because a 0.08 kg pin
+    /// elsewhere in the island had a diagonal of 3.9e5.
     pub(super) fn find_infeasible(&mut self) {
         let m = self.ap.n();
         let lam_scale = self.lam.iter().fold(0.0f64, |a, &x| a.max(x.abs()));
-        let b_scale = self.bp.iter().fold(0.0f64, |a, &x| a.max(x.abs()));
         let tol_l = 1e-13 * lam_scale.max(f64::MIN_POSITIVE);
-        let tol_w = 1e-13 * b_scale.max(self.max_diag * lam_scale).max(f64::MIN_POSITIVE);
+        resize(&mut self.wscale, m);
+        for i in 0..m {
+            if self.tight[i] {
+                let (cols, vals) = self.ap.row(i);
+                let s: f64 = cols.iter().zip(vals).map(|(&j, &a)| (a * self.lam[j]).abs()).sum();
+                self.wscale[i] = 1e-13 * (s + self.bp[i].abs()).max(f64::MIN_POSITIVE);
+            }
+        }
         self.infeasible.clear();
         for i in 0..m {
             let (lo, hi) = (self.lo_eff[i], self.hi_eff[i]);
             let bad = match self.state[i] {
                 IndexState::Free => self.lam[i] < lo - tol_l || self.lam[i] > hi + tol_l,
                 // A degenerate box (lo = hi) is satisfied by any w.
-                IndexState::Lower => lo < hi && self.w[i] < -tol_w,
-                IndexState::Upper => lo < hi && self.w[i] > tol_w,
+                IndexState::Lower => lo < hi && self.w[i] < -self.wscale[i],
+                IndexState::Upper => lo < hi && self.w[i] > self.wscale[i],
             };
             if bad {
                 self.infeasible.push(i);
