@@ -25,6 +25,9 @@ pub enum SettingsError {
     /// Gravity has a NaN or infinite component.
     #[error("gravity must be finite (got [{}, {}, {}])", .0[0], .0[1], .0[2])]
     NonFiniteGravity([f64; 3]),
+    /// The solve time budget must be finite and positive.
+    #[error("max_solve_us must be finite and > 0 (got {0})")]
+    InvalidSolveBudget(f64),
     /// An iteration count is unreasonably large (> 16).
     #[error("{what} must be at most 16 (got {value})")]
     TooManyIterations {

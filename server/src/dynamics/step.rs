@@ -234,7 +234,13 @@ impl StepWorkspace {
 
     /// Solves island `k` (steps 5–6): assembly, warm start, solve; leaves `v⁺` of the island's
     /// bodies in `v_new`/`w_new` and the impulses in the warm-start cache.
-    fn solve_island(&mut self, settings: &WorldSettings, k: usize, step: u64) -> Result<(), StepError> {
+    fn solve_island(
+        &mut self,
+        settings: &WorldSettings,
+        k: usize,
+        step: u64,
+        deadline: Option<Instant>,
+    ) -> Result<(), StepError> {
         let h = settings.timestep;
         let t = Instant::now();
         self.asm.assemble(k, &self.islands, &self.rows, &self.motion, h);
@@ -265,6 +271,7 @@ impl StepWorkspace {
         if self.capture {
             self.captured.push(self.problem.clone());
         }
+        self.solvers[solved].set_deadline(deadline);
         let s = self.solvers[solved].solve(&self.problem, &mut self.asm.lambda);
         let st = IslandStats {
             island: k,
@@ -341,9 +348,13 @@ impl World {
         ws.captured.clear();
         ws.stat_of_island.clear();
         ws.stat_of_island.resize(ws.islands.len(), usize::MAX);
+        // The time budget of the step's solves (`max_solve_us`) is shared by all its islands.
+        let deadline = self.settings.solver.max_solve_us.and_then(|us| {
+            Instant::now().checked_add(std::time::Duration::try_from_secs_f64(us * 1e-6).ok()?)
+        });
         for k in 0..ws.islands.len() {
             if !ws.islands.rows(k).is_empty() {
-                ws.solve_island(&self.settings, k, self.steps)?;
+                ws.solve_island(&self.settings, k, self.steps, deadline)?;
             }
         }
         let solved = self.steps + 1;

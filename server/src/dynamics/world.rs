@@ -76,6 +76,11 @@ impl WorldSettings {
         if !self.gravity.iter().all(|g| g.is_finite()) {
             return Err(SettingsError::NonFiniteGravity(self.gravity.into()));
         }
+        if let Some(us) = self.solver.max_solve_us
+            && !(us.is_finite() && us > 0.0)
+        {
+            return Err(SettingsError::InvalidSolveBudget(us));
+        }
         if self.projection_iterations > 16 {
             return Err(SettingsError::TooManyIterations {
                 what: "projection_iterations",

@@ -47,6 +47,7 @@ pub(crate) struct SceneSection {
     pub contact_compliance: Option<f64>,
     pub friction: Option<f64>,
     pub max_pivot_steps: Option<usize>,
+    pub max_solve_us: Option<f64>,
     pub projection_iterations: Option<usize>,
     pub warm_start: Option<bool>,
     pub gyroscopic: Option<bool>,

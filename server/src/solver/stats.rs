@@ -75,14 +75,19 @@ pub struct SolveStats {
     /// The returned iterate had positive merit (it would have added energy) and was scaled
     /// towards zero (`safe.rs`); only ever on a solve that did not converge.
     pub energy_scaled: bool,
+    /// A solve that did not converge returned its (safe) warm start: it had a smaller residual than
+    /// the best iterate.
+    pub returned_warm_start: bool,
     /// Murty single-pivot steps taken.
     pub murty_steps: usize,
     /// Steps of the semismooth Newton fallback (stalled outer friction iteration).
     pub newton_steps: usize,
     /// Proximal point iterations (semidefinite `A`).
     pub proximal_iterations: usize,
-    /// Projected-Newton safeguard steps taken.
+    /// Steps of the active-set safeguard taken (each a pivot step).
     pub projected_newton_steps: usize,
+    /// Of those, steps that took the projected Newton point (many bounds changed at once).
+    pub projected_steps: usize,
     /// Outer friction-bound updates.
     pub friction_updates: usize,
     /// Outer updates that took the exact coupled Newton point (GMRES preconditioned by the factor).

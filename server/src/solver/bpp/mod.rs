@@ -61,6 +61,9 @@ pub struct SolverOptions {
     pub max_steps: usize,
     /// Relative natural-map residual at which a solve is converged.
     pub tol_rel: f64,
+    /// Time budget (µs): of one solve, or — set by the world — of all island solves of a step. A
+    /// solve that spends it returns its best safe iterate with status `Budget` (`None`: no budget).
+    pub max_solve_us: Option<f64>,
     /// Steps without a decrease of the infeasible count before Murty's single pivot.
     pub murty_after: usize,
     /// Measure `‖L_deleted − chol(A_FF)‖_F` at every deletion step (costly; for Table 4).
@@ -92,6 +95,7 @@ impl Default for SolverOptions {
             ordering: OrderingKind::ReverseCuthillMcKee,
             max_steps: 35,
             tol_rel: 1e-10,
+            max_solve_us: None,
             murty_after: 3,
             measure_deletion_error: false,
             refine: true,
@@ -191,12 +195,16 @@ pub struct Solver {
     last_factor: FactorIn,
     /// Every fixed box (rows without `findex`) contains 0 (`safe.rs`).
     zero_feasible: bool,
+    /// The warm-start `λ₀`, permuted (zero without one): a candidate for a capped solve's answer.
+    warm_lam: Vec<f64>,
     /// Rounding scale of each tight row's `w` (`find_infeasible`).
     wscale: Vec<f64>,
     /// The solve must stop by then (time budget), if set.
     deadline: Option<Instant>,
     /// The deadline stopped the solve.
     out_of_time: bool,
+    /// The deadline of the current solve: `deadline`, or its own budget.
+    solve_deadline: Option<Instant>,
 }
 
 impl Solver {
@@ -227,7 +235,7 @@ impl Solver {
         if self.stats.pivot_steps >= self.opts.max_steps {
             return true;
         }
-        if self.deadline.is_some_and(|d| Instant::now() >= d) {
+        if self.solve_deadline.is_some_and(|d| Instant::now() >= d) {
             self.out_of_time = true;
             return true;
         }
@@ -330,14 +338,20 @@ impl Solver {
         self.l_valid = false;
         self.non_finite = false;
         self.out_of_time = false;
+        self.solve_deadline = self.deadline.or_else(|| {
+            let budget = std::time::Duration::try_from_secs_f64(self.opts.max_solve_us? * 1e-6).ok()?;
+            t_start.checked_add(budget)
+        });
         self.outer_hist = [0.0; OUTER_MEMORY];
         self.needs_prox = false;
         self.prox_shift = 0.0;
         self.best.fill(0.0);
+        resize(&mut self.warm_lam, m);
         if let Some(l0) = p.lambda0() {
             for new in 0..m {
                 self.lam[new] = l0[self.perm[new]];
             }
+            self.warm_lam.copy_from_slice(&self.lam);
         }
         if let Some(s0) = p.index0() {
             for new in 0..m {
@@ -362,13 +376,28 @@ impl Solver {
         if self.needs_prox {
             converged = self.proximal_solve(variant, has_friction);
         }
-        if !converged {
-            self.lam.copy_from_slice(&self.best);
-        }
-        // Final report against the true bounds, in the original order, of a safe iterate.
+        // Final report against the true bounds, in the original order, of a safe iterate: the
+        // solution, or else the better of the best iterate and the warm start, each made safe.
         let t = Instant::now();
-        if std::env::var_os("PIVOTSIM_NO_SAFE").is_some() { self.compute_w(); } else {
-        self.stats.energy_scaled = self.make_safe(); }
+        if converged {
+            self.stats.energy_scaled = self.make_safe();
+        } else {
+            self.lam.copy_from_slice(&self.best);
+            let scaled = self.make_safe();
+            let (_, r_best) = super::natural_residual(&self.lam, &self.w, &self.lop, &self.hip, &self.fip);
+            self.best.copy_from_slice(&self.lam);
+            self.lam.copy_from_slice(&self.warm_lam);
+            let scaled_warm = self.make_safe();
+            let (_, r_warm) = super::natural_residual(&self.lam, &self.w, &self.lop, &self.hip, &self.fip);
+            if r_warm < r_best {
+                self.stats.energy_scaled = scaled_warm;
+                self.stats.returned_warm_start = true;
+            } else {
+                self.lam.copy_from_slice(&self.best);
+                self.compute_w();
+                self.stats.energy_scaled = scaled;
+            }
+        }
         self.stats.solve_us += us(t);
         let (res, res_rel) = super::natural_residual(&self.lam, &self.w, &self.lop, &self.hip, &self.fip);
         self.stats.residual = res;
