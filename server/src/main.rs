@@ -224,7 +224,18 @@ fn main() -> ExitCode {
         Some(Command::Solve { file, variant, max_steps, ordering, tol, solution, deletion_error, json }) => {
             solve(&file, variant, max_steps, ordering, tol, solution, deletion_error, json)
         }
-        Some(Command::Run { scene, duration, variant, stats, poses, dump_mlcp, every, dump_hard, json, set }) => {
+        Some(Command::Run {
+            scene,
+            duration,
+            variant,
+            stats,
+            poses,
+            dump_mlcp,
+            every,
+            dump_hard,
+            json,
+            set,
+        }) => {
             let opts = pivotsim_server::run::RunOptions {
                 duration,
                 variant,

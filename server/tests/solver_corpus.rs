@@ -81,7 +81,11 @@ fn capped_iterates_are_feasible_and_do_no_work() {
             // Every cap 1..=35 on a third of the files, a spread of caps on the rest (run time).
             let all = checked % 3 == 0;
             for cap in (1..=35).filter(|c| all || [1, 2, 3, 5, 8, 13, 21, 34, 35].contains(c)) {
-                solver.set_options(SolverOptions { variant: Variant::Auto, max_steps: cap, ..Default::default() });
+                solver.set_options(SolverOptions {
+                    variant: Variant::Auto,
+                    max_steps: cap,
+                    ..Default::default()
+                });
                 let st = solver.solve(p, &mut lambda).clone();
                 let (rr, f, viol) = judge(p, &lambda);
                 let scale = lambda.iter().fold(1.0f64, |a, x| a.max(x.abs()));
@@ -109,7 +113,8 @@ fn capped_iterates_are_feasible_and_do_no_work() {
 #[test]
 fn corpus_convergence_does_not_regress() {
     let files = corpus();
-    let mut solver = Solver::new(SolverOptions { variant: Variant::Auto, max_steps: 100, ..Default::default() });
+    let mut solver =
+        Solver::new(SolverOptions { variant: Variant::Auto, max_steps: 100, ..Default::default() });
     let (mut warm35, mut warm100, mut cold35, mut cold100) = (0, 0, 0, 0);
     for (name, warm) in &files {
         let cold = cold(warm);
@@ -131,8 +136,14 @@ fn corpus_convergence_does_not_regress() {
         files.len()
     );
     // Floors: what this solver reached when the corpus was cut (README); raise them as it improves.
-    assert!(warm35 >= FLOOR_WARM_35 && warm100 >= FLOOR_WARM_100, "warm: {warm35} within 35, {warm100} within 100");
-    assert!(cold35 >= FLOOR_COLD_35 && cold100 >= FLOOR_COLD_100, "cold: {cold35} within 35, {cold100} within 100");
+    assert!(
+        warm35 >= FLOOR_WARM_35 && warm100 >= FLOOR_WARM_100,
+        "warm: {warm35} within 35, {warm100} within 100"
+    );
+    assert!(
+        cold35 >= FLOOR_COLD_35 && cold100 >= FLOOR_COLD_100,
+        "cold: {cold35} within 35, {cold100} within 100"
+    );
 }
 
 const FLOOR_WARM_35: usize = 12;
@@ -146,7 +157,8 @@ const FLOOR_COLD_100: usize = 20;
 fn time_budget_stops_with_a_safe_iterate() {
     let files = corpus();
     // The hardest file for the budget: the one needing the most steps uncapped.
-    let mut solver = Solver::new(SolverOptions { variant: Variant::Auto, max_steps: 1000, ..Default::default() });
+    let mut solver =
+        Solver::new(SolverOptions { variant: Variant::Auto, max_steps: 1000, ..Default::default() });
     let (name, p) = files
         .iter()
         .max_by_key(|(_, p)| {
@@ -173,7 +185,11 @@ fn time_budget_stops_with_a_safe_iterate() {
     let mut b = vec![0.0; easy.n()];
     solver.set_options(SolverOptions { variant: Variant::Auto, ..Default::default() });
     let s1 = solver.solve(easy, &mut a).status;
-    solver.set_options(SolverOptions { variant: Variant::Auto, max_solve_us: Some(1e9), ..Default::default() });
+    solver.set_options(SolverOptions {
+        variant: Variant::Auto,
+        max_solve_us: Some(1e9),
+        ..Default::default()
+    });
     let s2 = solver.solve(easy, &mut b).status;
     assert_eq!((s1, s2), (SolveStatus::Converged, SolveStatus::Converged));
     assert_eq!(a, b);

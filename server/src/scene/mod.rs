@@ -45,11 +45,11 @@ use std::path::Path;
 use thiserror::Error;
 
 pub use builtin::{BUILTIN, BuiltinScene, builtin};
-pub use overrides::{OverrideError, SceneOverride};
 pub use controls::{
     Actuator, ActuatorKind, ActuatorTarget, AxisMode, ButtonAction, Controls, InputError, JoyAxis, JoyButton,
     JoystickError, JoystickMap, Neutral, SceneEvent, Script, ScriptEntry,
 };
+pub use overrides::{OverrideError, SceneOverride};
 
 use crate::dynamics::{ControlError, ModelError, StepError, World};
 

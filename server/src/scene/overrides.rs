@@ -89,7 +89,8 @@ pub fn apply(text: &str, overrides: &[SceneOverride]) -> Result<String, Override
     if overrides.is_empty() {
         return Ok(text.to_string());
     }
-    let mut doc: DocumentMut = text.parse().map_err(|e: toml_edit::TomlError| OverrideError::Scene(e.to_string()))?;
+    let mut doc: DocumentMut =
+        text.parse().map_err(|e: toml_edit::TomlError| OverrideError::Scene(e.to_string()))?;
     for o in overrides {
         let parts: Vec<&str> = o.key.split('.').collect();
         let value = o.toml_value();
@@ -103,9 +104,13 @@ pub fn apply(text: &str, overrides: &[SceneOverride]) -> Result<String, Override
                 scene.insert(field, Item::Value(value));
             }
             [table, name, field] => {
-                let no_entry =
-                    || OverrideError::NoEntry { key: o.key.clone(), table: table.to_string(), name: name.to_string() };
-                let entries = doc.get_mut(table).and_then(Item::as_array_of_tables_mut).ok_or_else(no_entry)?;
+                let no_entry = || OverrideError::NoEntry {
+                    key: o.key.clone(),
+                    table: table.to_string(),
+                    name: name.to_string(),
+                };
+                let entries =
+                    doc.get_mut(table).and_then(Item::as_array_of_tables_mut).ok_or_else(no_entry)?;
                 let entry = entries
                     .iter_mut()
                     .find(|t| t.get("name").and_then(Item::as_str) == Some(name))

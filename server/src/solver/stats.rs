@@ -78,6 +78,9 @@ pub struct SolveStats {
     /// A solve that did not converge returned its (safe) warm start: it had a smaller residual than
     /// the best iterate.
     pub returned_warm_start: bool,
+    /// A solve that did not converge returned the last exact solution with frozen friction bounds
+    /// (an ODE-style answer: complementary, with friction boxes from an intermediate normal).
+    pub returned_frozen: bool,
     /// Murty single-pivot steps taken.
     pub murty_steps: usize,
     /// Steps of the semismooth Newton fallback (stalled outer friction iteration).

@@ -197,8 +197,11 @@ pub struct Solver {
     zero_feasible: bool,
     /// The warm-start `λ₀`, permuted (zero without one): a candidate for a capped solve's answer.
     warm_lam: Vec<f64>,
-    /// Rounding scale of each tight row's `w` (`find_infeasible`).
-    wscale: Vec<f64>,
+    /// The last exact solution of the problem with frozen friction bounds, if any (`have_frozen`).
+    frozen: Vec<f64>,
+    have_frozen: bool,
+    /// `‖A_i‖₁` of each permuted row (`find_infeasible`).
+    row_norm: Vec<f64>,
     /// The solve must stop by then (time budget), if set.
     deadline: Option<Instant>,
     /// The deadline stopped the solve.
@@ -322,6 +325,10 @@ impl Solver {
             (0..m).all(|i| self.fip[i].is_some() || (self.lop[i] <= 0.0 && self.hip[i] >= 0.0));
         self.stats.ordering_us = us(t);
         self.max_diag = self.ap.max_diag();
+        resize(&mut self.row_norm, m);
+        for i in 0..m {
+            self.row_norm[i] = self.ap.row(i).1.iter().map(|a| a.abs()).sum();
+        }
 
         for v in [&mut self.lam, &mut self.w, &mut self.best, &mut self.rhs, &mut self.tmp] {
             resize(v, m);
@@ -347,6 +354,9 @@ impl Solver {
         self.prox_shift = 0.0;
         self.best.fill(0.0);
         resize(&mut self.warm_lam, m);
+        resize(&mut self.lam_hat, m);
+        resize(&mut self.frozen, m);
+        self.have_frozen = false;
         if let Some(l0) = p.lambda0() {
             for new in 0..m {
                 self.lam[new] = l0[self.perm[new]];
@@ -382,21 +392,28 @@ impl Solver {
         if converged {
             self.stats.energy_scaled = self.make_safe();
         } else {
-            self.lam.copy_from_slice(&self.best);
-            let scaled = self.make_safe();
-            let (_, r_best) = super::natural_residual(&self.lam, &self.w, &self.lop, &self.hip, &self.fip);
-            self.best.copy_from_slice(&self.lam);
-            self.lam.copy_from_slice(&self.warm_lam);
-            let scaled_warm = self.make_safe();
-            let (_, r_warm) = super::natural_residual(&self.lam, &self.w, &self.lop, &self.hip, &self.fip);
-            if r_warm < r_best {
-                self.stats.energy_scaled = scaled_warm;
-                self.stats.returned_warm_start = true;
-            } else {
-                self.lam.copy_from_slice(&self.best);
-                self.compute_w();
-                self.stats.energy_scaled = scaled;
+            // Candidates: the best iterate, the warm start and the last exact solution with frozen
+            // friction bounds, each made safe; the one with the smallest true residual is returned.
+            let mut best_r = f64::INFINITY;
+            for c in 0..3 {
+                match c {
+                    0 => self.lam.copy_from_slice(&self.best),
+                    1 => self.lam.copy_from_slice(&self.warm_lam),
+                    _ if self.have_frozen && self.prox_shift == 0.0 => self.lam.copy_from_slice(&self.frozen),
+                    _ => continue,
+                }
+                let scaled = self.make_safe();
+                let (_, r) = super::natural_residual(&self.lam, &self.w, &self.lop, &self.hip, &self.fip);
+                if r < best_r || c == 0 {
+                    best_r = r;
+                    self.lam_hat.copy_from_slice(&self.lam);
+                    self.stats.energy_scaled = scaled;
+                    self.stats.returned_warm_start = c == 1;
+                    self.stats.returned_frozen = c == 2;
+                }
             }
+            self.lam.copy_from_slice(&self.lam_hat);
+            self.compute_w();
         }
         self.stats.solve_us += us(t);
         let (res, res_rel) = super::natural_residual(&self.lam, &self.w, &self.lop, &self.hip, &self.fip);
@@ -469,7 +486,10 @@ impl Solver {
             }
             self.find_infeasible();
             if self.infeasible.is_empty() {
-                // The boxed LCP with these bounds is solved exactly.
+                // The boxed LCP with these bounds is solved exactly: the answer of a capped solve
+                // (module docs, "Safe when capped").
+                self.frozen.copy_from_slice(&self.lam);
+                self.have_frozen = true;
                 if res_rel <= self.opts.tol_rel || res == 0.0 {
                     return true;
                 }
@@ -643,30 +663,25 @@ impl Solver {
     }
 
     /// Fills `infeasible` with the variables that violate eq. 4 against the frozen bounds. The
-    /// sign of `w_i` on a tight row is trusted beyond the rounding of its own sum,
-    /// `|w_i| > 1e-13 (|b_i| + Σ_j |A_ij λ_j|)`: a global scale (the largest diagonal times `‖λ‖∞`)
-    /// let a normal row of the forwarder sit at 0 with `w = −1.1e-5` because a 0.08 kg pin
-    /// elsewhere in the island had a diagonal of 3.9e5.
+    /// sign of `w_i` on a tight row is trusted beyond `1e-13 (|b_i| + ‖A_i‖₁ ‖λ‖∞)`: the rounding
+    /// of the row's sum when `λ` carries errors of the size of its largest entry. (A global scale,
+    /// the largest diagonal times `‖λ‖∞`, let a normal row of the forwarder sit at 0 with
+    /// `w = −1.1e-5` because a 0.08 kg pin elsewhere in the island had a diagonal of 3.9e5; the
+    /// row's own `Σ |A_ij λ_j|` is too small where the neighbouring `λ` vanish, and released a
+    /// contact with `w = −4e-16` over and over.)
     pub(super) fn find_infeasible(&mut self) {
         let m = self.ap.n();
         let lam_scale = self.lam.iter().fold(0.0f64, |a, &x| a.max(x.abs()));
         let tol_l = 1e-13 * lam_scale.max(f64::MIN_POSITIVE);
-        resize(&mut self.wscale, m);
-        for i in 0..m {
-            if self.tight[i] {
-                let (cols, vals) = self.ap.row(i);
-                let s: f64 = cols.iter().zip(vals).map(|(&j, &a)| (a * self.lam[j]).abs()).sum();
-                self.wscale[i] = 1e-13 * (s + self.bp[i].abs()).max(f64::MIN_POSITIVE);
-            }
-        }
         self.infeasible.clear();
         for i in 0..m {
             let (lo, hi) = (self.lo_eff[i], self.hi_eff[i]);
+            let tol_w = || 1e-13 * (self.bp[i].abs() + self.row_norm[i] * lam_scale).max(f64::MIN_POSITIVE);
             let bad = match self.state[i] {
                 IndexState::Free => self.lam[i] < lo - tol_l || self.lam[i] > hi + tol_l,
                 // A degenerate box (lo = hi) is satisfied by any w.
-                IndexState::Lower => lo < hi && self.w[i] < -self.wscale[i],
-                IndexState::Upper => lo < hi && self.w[i] > self.wscale[i],
+                IndexState::Lower => lo < hi && self.w[i] < -tol_w(),
+                IndexState::Upper => lo < hi && self.w[i] > tol_w(),
             };
             if bad {
                 self.infeasible.push(i);

@@ -154,7 +154,12 @@ impl Solver {
             self.record_step();
             self.stats.newton_steps += 1;
             if let Some(false) = self.coupled_newton(which) {
-                // GMRES did not converge: recompute the frozen point.
+                // GMRES did not converge: recompute the frozen point (a pivot step of its own).
+                if self.stop_now() {
+                    self.lam.copy_from_slice(&self.lam_old);
+                    self.w.copy_from_slice(&self.w_old);
+                    break;
+                }
                 self.pivot_solve(variant);
                 self.record_step();
             }
