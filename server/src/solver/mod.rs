@@ -10,7 +10,7 @@
 //! | `ordering.rs` | Cuthill–McKee / reverse Cuthill–McKee (§3.4), bandwidth and envelope |
 //! | `dense.rs` | dense left-looking Cholesky, row/column deletion, solves (Alg. 1, 2) |
 //! | `envelope.rs` | envelope (skyline) Cholesky, deletion on the skyline, solves (Alg. 3) |
-//! | `bpp.rs` | block principal pivoting (eq. 4–6) with Murty fallback and friction coupling |
+//! | `bpp/` | block principal pivoting (eq. 4–6): `mod.rs` the driver, `factor.rs` the factor strategies, `safeguard.rs` the active-set and proximal safeguards, `coupled.rs` friction coupling, `safe.rs` safe returned iterates |
 //! | `pgs.rs` | projected Gauss–Seidel baseline |
 //! | `reference.rs` | brute-force enumeration of index sets (test reference for small problems) |
 
