@@ -53,6 +53,10 @@ pub struct WorldSettings {
     /// at every step end. 1 removes that error to ~1e-8 m but costs a second solve per step and
     /// dissipates energy at fast rotations (module doc).
     pub projection_iterations: usize,
+    /// Geometric stiffness of loaded joints (`geometric_stiffness.rs`): on by default (it only
+    /// acts on bodies whose joint loads make the step unstable); off is the paper's step as
+    /// published.
+    pub geometric_stiffness: bool,
 }
 
 impl Default for WorldSettings {
@@ -64,6 +68,7 @@ impl Default for WorldSettings {
             gyroscopic: true,
             warm_start: true,
             projection_iterations: 0,
+            geometric_stiffness: true,
         }
     }
 }

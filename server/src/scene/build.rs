@@ -22,6 +22,7 @@ use super::format::*;
 use super::{Location, Scene, SceneError};
 use crate::dynamics::{
     BodyBuilder, BodyId, ColliderBuilder, CollisionGroups, CouplingBuilder, ForceElement, FreeAxis,
+    WatchdogSettings,
     JointBuilder, JointFrames, JointKind, JointLimit, JointMotor, Material, ModelError, Shape, SpringDamper,
     World, WorldSettings, box_inertia, capsule_inertia, cylinder_inertia, sphere_inertia,
 };
@@ -532,6 +533,16 @@ pub(crate) fn build(file: &str, text: &str) -> R<Scene> {
     if let Some(w) = sec.warm_start {
         settings.warm_start = w;
     }
+    if let Some(g) = sec.geometric_stiffness {
+        settings.geometric_stiffness = g;
+    }
+    let mut watchdog = WatchdogSettings::default();
+    if let Some(v) = sec.max_speed {
+        watchdog.max_speed = probe.positive(&sspan, "max_speed", v)?;
+    }
+    if let Some(e) = sec.energy_margin {
+        watchdog.energy_margin = probe.positive(&sspan, "energy_margin", e)?;
+    }
     let duration = probe.positive(&sspan, "duration", sec.duration.unwrap_or(20.0))?;
     if sec.name.trim().is_empty() {
         return Err(probe.invalid(&sspan, "name", "the scene needs a name"));
@@ -674,6 +685,7 @@ pub(crate) fn build(file: &str, text: &str) -> R<Scene> {
         controls,
         script,
         joystick,
+        watchdog,
     })
 }
 

@@ -50,6 +50,9 @@ pub(crate) struct SceneSection {
     pub projection_iterations: Option<usize>,
     pub warm_start: Option<bool>,
     pub gyroscopic: Option<bool>,
+    pub geometric_stiffness: Option<bool>,
+    pub max_speed: Option<f64>,
+    pub energy_margin: Option<f64>,
 }
 
 /// `[[material]]`: friction of a pair of named materials.

@@ -48,7 +48,7 @@ pub use controls::{
     JoystickError, JoystickMap, Neutral, SceneEvent, Script, ScriptEntry,
 };
 
-use crate::dynamics::{ControlError, ModelError, StepError, World};
+use crate::dynamics::{ControlError, ModelError, StepError, WatchdogSettings, World};
 
 /// A place in a scene file (1-based line and column).
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -158,6 +158,8 @@ pub struct Scene {
     pub script: Script,
     /// Default joystick mapping.
     pub joystick: JoystickMap,
+    /// Bounds of the instability watchdog (`[scene] max_speed`, `energy_margin`).
+    pub watchdog: WatchdogSettings,
 }
 
 impl Scene {
