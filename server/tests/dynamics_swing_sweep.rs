@@ -6,6 +6,7 @@
 #[path = "support/swing_rig.rs"]
 mod swing_rig;
 
+use pivotsim_server::dynamics::GeometricStiffness;
 use pivotsim_server::solver::Variant;
 use swing_rig::*;
 
@@ -23,13 +24,13 @@ fn sweep() {
         _ => Variant::Skyline,
     };
     println!("mode      load_kg ratio    joint_err_m  max_speed  max_gain  final_E  period/ref  tension_N  step_us finite");
-    for gs in [false, true] {
+    for gs in GeometricStiffness::ALL {
         for &load in &loads {
             let r = run(load, angle, gs, variant, seconds);
             let p = r.period.map(|p| p / compound_period(load, angle.to_radians())).unwrap_or(f64::NAN);
             println!(
                 "{:9} {:8} {:8.0} {:11.3e} {:10.3e} {:9.2e} {:8.3} {:10.4} {:10.3e} {:8.1} {}",
-                if gs { "gs on" } else { "gs off" },
+                gs.name(),
                 load,
                 load / M_LINK,
                 r.max_joint_error,
@@ -49,12 +50,22 @@ fn sweep() {
 #[ignore]
 fn trace() {
     let load: f64 = std::env::var("TRACE_LOAD").ok().and_then(|s| s.parse().ok()).unwrap_or(5000.0);
-    let mut w = world(load, 30.0, true, Variant::Skyline);
+    let mut w = world(load, 30.0, GeometricStiffness::Implicit, Variant::Skyline);
     for n in 0..1200 {
         w.step().unwrap();
         let e = w.max_joint_error();
         if n < 10 || e > 5e-4 {
-            println!("step {n} err {e:.3e} gs_bodies {}", w.geometric_stiffness_bodies());
+            let st = w.island_stats()[0];
+            println!(
+                "step {n} err {e:.3e} gs_bodies {} status {:?} pivots {} res {:.2e} viol {:.2e} wmax {:.3} wload {:.3}",
+                w.geometric_stiffness_bodies(),
+                st.status,
+                st.pivot_steps,
+                st.residual_rel,
+                st.max_violation,
+                w.bodies().iter().map(|b| b.angvel().norm()).fold(0.0, f64::max),
+                w.bodies().last().unwrap().angvel().norm()
+            );
         }
     }
 }

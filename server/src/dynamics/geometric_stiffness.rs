@@ -21,48 +21,54 @@
 //!
 //! **What we add.** Per dynamic body `k`, summed over the joints at it (their linear rows: the
 //! anchor force, from the previous step's impulses `λ̄` — the warm start — as `F = Σ λ̄_i u_i / h`),
-//! a positive semidefinite stiffness
+//! the isotropic positive semidefinite stiffness
 //!
 //! ```text
-//!   K̃_k = Σ_joints | sym(K) |,       sym(K) = (r Fᵀ + F rᵀ)/2 − (F · r) 𝟙                       (G2)
+//!   K̃_k = Σ_joints |F| |r| 𝟙   ⪰   Σ_joints |sym(K)|,     sym(K) = (r Fᵀ + F rᵀ)/2 − (F · r) 𝟙     (G2)
 //! ```
 //!
-//! (`|S|` = `V |Λ| Vᵀ`: absolute eigenvalues, as Andrews et al. make the correction definite; the
-//! antisymmetric part `(r Fᵀ − F rᵀ)/2` cancels over a body in equilibrium and is dropped). It
-//! enters the body's effective rotational inertia, `Ĩ_k = I_k + α_k h² K̃_k` (world frame), and with
-//! it the effective mass matrix `M̃ = M + h² K̃` of eq. 1–2: `A = J M̃⁻¹ Jᵀ + C/h²` and
-//! `v⁺ = v_free + M̃⁻¹ Jᵀ λ`. `M̃` is block diagonal per body like `M` (rotation–rotation block only,
-//! `F` being held in world), so `A` keeps its sparsity and stays symmetric positive definite; the
-//! solver is untouched. Cross-body terms (the change of `F` with the other body's rotation) would
-//! put fill into `M̃⁻¹` and `A`; they are left out.
+//! (the eigenvalues of `sym(K)` are `−F·r` and `(−F·r ± |F||r|)/2`, all of modulus `≤ |F||r|`; the
+//! antisymmetric part cancels over a body in equilibrium and is dropped). It raises the body's
+//! rotational inertia to `Ĩ_k = I_k + α_k h² K̃_k` and with it the effective mass matrix
+//! `M̃ = M + h² K̃` of eq. 1–2: `A = J M̃⁻¹ Jᵀ + C/h²`, `v⁺ = v_free + M̃⁻¹ Jᵀ λ`. `M̃` is block
+//! diagonal per body like `M` (rotation–rotation block only, `F` being held in world), so `A` keeps
+//! its sparsity and stays symmetric positive definite; the solver is untouched. Cross-body terms
+//! (the change of `F` with the other body's rotation) would put fill into `M̃⁻¹` and `A`; they are
+//! left out. Isotropic, `Ĩ` keeps `I`'s principal axes: the exact `|sym(K)|` (Andrews et al.'s
+//! absolute eigenvalues) has no stiffness along a link's axis, and a `K̃` slightly off that axis
+//! then steers the large tilt impulses into the link's tiny twist inertia (`m r²/2`): links spun at
+//! 50–75 rad/s about their axes and the joint error reached 1.6 mm at a mass ratio of 1e4 (0.02 mm
+//! with the isotropic bound).
 //!
-//! It enters the momentum equation linearly implicitly, `F(x⁺) ≈ F(x) + h K v⁺` with `K → −K̃`
-//! (Tournier et al. 2015; Andrews et al. 2017):
+//! Two ways to put `M̃` into the momentum equation (`[scene] geometric_stiffness`):
 //!
 //! ```text
-//!   M̃ v⁺ = M v₀ + h f + Jᵀ λ,     v_free = M̃⁻¹ (M v₀ + h f) = v₀ + M̃⁻¹ (h f − h² K̃ v₀)        (G3)
+//!   implicit (default):  M̃ v⁺ = M v₀ + h f + Jᵀ λ,      v_free = v₀ + M̃⁻¹ (h f − h² K̃ v₀)     (G3)
+//!   inertial:            M̃ (v⁺ − v₀) = h f + Jᵀ λ,      v_free = v₀ + M̃⁻¹ h f                 (G4)
 //! ```
 //!
-//! so `b = r − J v_free` (eq. 2) changes with `v_free`. The price is damping: every rotation of a
-//! loaded body is charged `h² K̃ ω⁺`, the rigid swing of a loaded chain included. For a chain
-//! pendulum of length `L` the energy lost is about `h² T L ω²` per step against `½ m L² ω²`, a
-//! rate `≈ 2 h g / L` (0.16 /s at 2 m; measured on the rig: 80 % of the swing energy in 20 s),
-//! independent of the load, while the period stays within 1 % of the compound pendulum's.
-//!
-//! Tried and rejected (numbers in the issue note): charging `M̃` only against the velocity change,
-//! `M̃ (v⁺ − v₀) = h f + Jᵀ λ` (an added inertia, no damping): stable up to a mass ratio of 100,
-//! but from 300 on the chain explodes as without the correction, also with 4 × and 16 × `K̃` —
-//! the block-diagonal `K̃` without its cross-body terms is not enough there, the damping is.
+//! (G3) is the linearly implicit step of Tournier et al. and Andrews et al., `F(x⁺) ≈ F(x) +
+//! h K v⁺` with `K → −K̃`: it damps every rotation of a loaded body, the rigid swing of a loaded
+//! chain included — for a chain pendulum of length `L` about `h² T L ω²` per step against
+//! `½ m L² ω²`, a rate `≈ 2 h g / L` independent of the load (the rig of 2 m keeps 12–17 % of its
+//! swing energy after 20 s), while its energy never rises and its period stays within 1 % of the
+//! compound pendulum's. (G4) charges the stiffness only against the velocity change within the
+//! step: the stiff mode sees the inertia `I + h² k`, so `h² k / (I + h² k) < 1` and the explicit
+//! part stays stable, while a steady rotation is not dragged (the rig keeps its energy to a few %,
+//! period within 0.5 %); but the energy oscillates up to 1.7–3.7 % above its initial value. The
+//! default is (G3), whose energy only decays; measurements in the issue note and
+//! `tests/dynamics_swinging_load.rs`.
 //!
 //! **Where it applies.** Only where it matters: the weight `α_k = clamp(ρ_k / ρ₀ − 1, 0, 1)` with
-//! `ρ_k = h² ‖K̃_k‖_F / I_min,k` (the stiffness ratio of the body's stiffest mode, bounded above by
-//! the Frobenius norm) and `ρ₀ = 0.25` ([`RHO_START`]) ramps the correction in between a sixteenth
-//! and an eighth of the explicit stability bound `ρ = 4`: light machines and free-floating bodies
-//! (where the exact momentum balance of the plain step matters, `tests/dynamics_momentum.rs`) are
-//! left exactly as before, and halving `α` on the rig lets it break again at a mass ratio of 1,000.
+//! `ρ_k = h² ‖K̃_k‖_F / I_min,k` (the stiffness ratio of the body's stiffest mode, up to the
+//! Frobenius factor √3) and `ρ₀ = 0.25` ([`RHO_START`]) ramps the correction in between a
+//! sixteenth and an eighth of the explicit stability bound `ρ = 4`: light machines and
+//! free-floating bodies (where the exact momentum balance of the plain step matters,
+//! `tests/dynamics_momentum.rs`) are left exactly as before. Halving `α` on the rig lets it break
+//! again at a mass ratio of 1,000.
 //!
-//! **Cost.** Per joint with linear rows and valid warm impulses: its world geometry and one 3 × 3
-//! symmetric eigen-decomposition per loaded body end; per corrected body one 3 × 3 inverse. Nothing
+//! **Cost.** Per joint with linear rows and valid warm impulses: its world geometry and two norms;
+//! per corrected body one 3 × 3 inverse. Nothing
 //! is allocated (one reusable `Vec<Matrix3>` per world).
 
 use nalgebra::{Matrix3, Vector3};
@@ -72,16 +78,56 @@ use super::joint::Joint;
 use super::joint_rows::{JointGeometry, Side, linear_row_axes};
 use super::step::WarmRow;
 
+/// How the geometric stiffness of loaded joints enters the step (module doc, eq. G3/G4).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum GeometricStiffness {
+    /// Not at all: the paper's step as published (joints' lever arms frozen at the step start).
+    Off,
+    /// Linearly implicit (G3), as Tournier et al. / Andrews et al.: energy only decays (default).
+    #[default]
+    Implicit,
+    /// As added inertia against the change of velocity only (G4): no added damping; the energy
+    /// oscillates by a few % about its initial value.
+    Inertial,
+}
+
+impl GeometricStiffness {
+    /// Every mode.
+    pub const ALL: [GeometricStiffness; 3] =
+        [GeometricStiffness::Off, GeometricStiffness::Implicit, GeometricStiffness::Inertial];
+
+    /// The name in scene files.
+    pub fn name(self) -> &'static str {
+        match self {
+            GeometricStiffness::Off => "off",
+            GeometricStiffness::Implicit => "implicit",
+            GeometricStiffness::Inertial => "inertial",
+        }
+    }
+
+    /// The mode of a scene-file name.
+    pub fn from_name(name: &str) -> Option<Self> {
+        Self::ALL.into_iter().find(|m| m.name() == name)
+    }
+}
+
 /// Stiffness ratio `ρ₀ = h² ‖K̃‖ / I_min` at which the correction starts (module doc); full from `2 ρ₀`.
 pub const RHO_START: f64 = 0.25;
 
 /// `| sym(r Fᵀ) − (F·r) 𝟙 |` (eq. G2) of a force `f` at lever arm `r`.
-pub(crate) fn abs_sym_stiffness(r: &Vector3<f64>, f: &Vector3<f64>) -> Matrix3<f64> {
+#[cfg(test)]
+fn abs_sym_stiffness(r: &Vector3<f64>, f: &Vector3<f64>) -> Matrix3<f64> {
     let rf = r * f.transpose();
     let s = (rf + rf.transpose()) * 0.5 - Matrix3::identity() * f.dot(r);
     let eig = s.symmetric_eigen();
     let abs = eig.eigenvalues.map(f64::abs);
     eig.eigenvectors * Matrix3::from_diagonal(&abs) * eig.eigenvectors.transpose()
+}
+
+/// `|F| |r| 𝟙`: the isotropic upper bound of `|sym(K)|` (eq. G2) of a force `f` at lever arm `r`.
+#[inline]
+pub(crate) fn bound_stiffness(r: &Vector3<f64>, f: &Vector3<f64>) -> Matrix3<f64> {
+    Matrix3::identity() * (f.norm() * r.norm())
 }
 
 /// Accumulates `K̃_k` (eq. G2) of every body into `out` (world-indexed, reset here) from the enabled
@@ -131,10 +177,10 @@ pub(crate) fn accumulate(
         }
         // Body B receives +F at p_b (lever r_B), body A −F at p_b (lever r_A): see joint_rows.rs.
         if dyn_a {
-            out[j.body_a.index()] += abs_sym_stiffness(&g.r_a, &(-force));
+            out[j.body_a.index()] += bound_stiffness(&g.r_a, &force);
         }
         if let (true, Some(id)) = (dyn_b, j.body_b) {
-            out[id.index()] += abs_sym_stiffness(&g.r_b, &force);
+            out[id.index()] += bound_stiffness(&g.r_b, &force);
         }
     }
 }
@@ -174,10 +220,12 @@ mod tests {
         let kt = abs_sym_stiffness(&up, &Vector3::new(0.0, 0.0, 1000.0));
         let expect = Matrix3::from_diagonal(&Vector3::new(50.0, 50.0, 0.0));
         assert!((kt - expect).norm() < 1e-9, "{kt}");
-        // PSD for any force and arm.
+        // PSD for any force and arm, and below the isotropic bound used.
         let ks = abs_sym_stiffness(&r, &f);
         assert!(ks.symmetric_eigen().eigenvalues.min() > -1e-9);
         assert!((ks - ks.transpose()).norm() < 1e-12);
+        let gap = bound_stiffness(&r, &f) - ks;
+        assert!(gap.symmetric_eigen().eigenvalues.min() > -1e-9, "{gap}");
     }
 
     #[test]

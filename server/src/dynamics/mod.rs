@@ -105,7 +105,7 @@ pub use error::{
     StateError, StepError,
 };
 pub use force::{ForceElement, ForceId, SpringDamper};
-pub use geometric_stiffness::RHO_START;
+pub use geometric_stiffness::{GeometricStiffness, RHO_START};
 pub use island::Islands;
 pub use joint::{
     DEFAULT_COMPLIANCE, JOINT_SLOTS, Joint, JointBuilder, JointFrames, JointId, JointKind, JointRow,

@@ -55,7 +55,7 @@ use super::body::{BodyKind, RigidBody};
 use super::coupling_rows::push_coupling_row;
 use super::error::StepError;
 use super::force::{ForceAccumulator, ForceElement, ForceId};
-use super::geometric_stiffness;
+use super::geometric_stiffness::{self, GeometricStiffness};
 use super::island::Islands;
 use super::joint::JOINT_SLOTS;
 use super::joint_rows::{Side, push_joint_rows};
@@ -145,7 +145,8 @@ fn gyroscopic(b: &RigidBody, h: f64) -> Vector3<f64> {
 /// `(M − h D − h² K) Δ = h f + h² K (v₀, ω₀)` (`force.rs`); explicit `h M⁻¹ f` if singular.
 ///
 /// `gs` is the geometric-stiffness term `α h² K̃` of the body (zero when off) and `drag` its
-/// velocity term `−α h² K̃ ω₀` (`geometric_stiffness.rs`, eq. G3).
+/// velocity term (`−α h² K̃ ω₀` in the implicit mode, eq. G3 of `geometric_stiffness.rs`; zero in
+/// the inertial mode, G4).
 #[allow(clippy::too_many_arguments)]
 fn implicit_change(
     b: &RigidBody,
@@ -208,7 +209,7 @@ impl StepWorkspace {
         step: u64,
     ) {
         let (h, n) = (settings.timestep, bodies.len());
-        if !settings.geometric_stiffness {
+        if settings.geometric_stiffness == GeometricStiffness::Off {
             self.stiffness.clear();
         } else {
             geometric_stiffness::accumulate(bodies, joints, &self.warm, step, h, &mut self.stiffness);
@@ -244,7 +245,10 @@ impl StepWorkspace {
                             self.gs_bodies += 1;
                         }
                     }
-                    let drag = -(gs * w0);
+                    let drag = match settings.geometric_stiffness {
+                        GeometricStiffness::Implicit => -(gs * w0),
+                        GeometricStiffness::Inertial | GeometricStiffness::Off => Vector3::zeros(),
+                    };
                     let (dv, dw) = match self.forces.implicit[i] {
                         true => implicit_change(b, &self.forces, i, h, v0, w0, &gs, drag),
                         false => (

@@ -22,7 +22,7 @@ use super::format::*;
 use super::{Location, Scene, SceneError};
 use crate::dynamics::{
     BodyBuilder, BodyId, ColliderBuilder, CollisionGroups, CouplingBuilder, ForceElement, FreeAxis,
-    WatchdogSettings,
+    GeometricStiffness, WatchdogSettings,
     JointBuilder, JointFrames, JointKind, JointLimit, JointMotor, Material, ModelError, Shape, SpringDamper,
     World, WorldSettings, box_inertia, capsule_inertia, cylinder_inertia, sphere_inertia,
 };
@@ -533,8 +533,10 @@ pub(crate) fn build(file: &str, text: &str) -> R<Scene> {
     if let Some(w) = sec.warm_start {
         settings.warm_start = w;
     }
-    if let Some(g) = sec.geometric_stiffness {
-        settings.geometric_stiffness = g;
+    if let Some(g) = &sec.geometric_stiffness {
+        settings.geometric_stiffness = GeometricStiffness::from_name(g).ok_or_else(|| {
+            probe.invalid(&sspan, "geometric_stiffness", format!("unknown mode `{g}` (implicit, inertial, off)"))
+        })?;
     }
     let mut watchdog = WatchdogSettings::default();
     if let Some(v) = sec.max_speed {

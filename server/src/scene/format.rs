@@ -50,7 +50,7 @@ pub(crate) struct SceneSection {
     pub projection_iterations: Option<usize>,
     pub warm_start: Option<bool>,
     pub gyroscopic: Option<bool>,
-    pub geometric_stiffness: Option<bool>,
+    pub geometric_stiffness: Option<String>,
     pub max_speed: Option<f64>,
     pub energy_margin: Option<f64>,
 }

@@ -6,7 +6,7 @@
 
 use nalgebra::Vector3;
 use pivotsim_server::dynamics::{
-    BodyBuilder, JointBuilder, World, WorldSettings, capsule_inertia, sphere_inertia,
+    BodyBuilder, GeometricStiffness, JointBuilder, World, WorldSettings, capsule_inertia, sphere_inertia,
 };
 use pivotsim_server::solver::{SolverOptions, Variant};
 
@@ -37,10 +37,11 @@ pub struct RigRun {
     pub max_tension: f64,
 }
 
-pub fn world(load: f64, angle_deg: f64, gs: bool, variant: Variant) -> World {
+pub fn world(load: f64, angle_deg: f64, gs: GeometricStiffness, variant: Variant) -> World {
     let settings = WorldSettings {
         geometric_stiffness: gs,
         solver: SolverOptions { variant, ..Default::default() },
+        projection_iterations: std::env::var("RIG_PROJECTION").ok().and_then(|s| s.parse().ok()).unwrap_or(0),
         ..Default::default()
     };
     let mut w = World::new(settings).unwrap();
@@ -81,7 +82,7 @@ pub fn energy(w: &World) -> f64 {
     w.kinetic_energy() + w.potential_energy()
 }
 
-pub fn run(load: f64, angle_deg: f64, gs: bool, variant: Variant, seconds: f64) -> RigRun {
+pub fn run(load: f64, angle_deg: f64, gs: GeometricStiffness, variant: Variant, seconds: f64) -> RigRun {
     let mut w = world(load, angle_deg, gs, variant);
     let h = w.settings().timestep;
     let e0 = energy(&w);
