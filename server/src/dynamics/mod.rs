@@ -93,7 +93,7 @@ pub use body::{
     BodyBuilder, BodyId, BodyKind, RigidBody, box_inertia, capsule_inertia, cylinder_inertia, sphere_inertia,
 };
 pub use buoyancy::{Buoyancy, BuoyancyPoint, Water, Wave};
-pub use chain::{Chain, ChainBuilder, ChainEnd, ChainShape};
+pub use chain::{Chain, ChainBuilder, ChainEnd, ChainShape, steel_rope_mass_per_metre};
 pub use contact::{
     Bounds, Collider, ColliderBuilder, ColliderId, CollisionGroups, ContactError, ContactReport,
     ContactSettings, DEFAULT_CONTACT_COMPLIANCE, DEFAULT_MATERIAL, MAX_TERRAIN_TRIANGLES, Material, Shape,

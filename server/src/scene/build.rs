@@ -22,7 +22,7 @@ use super::format::*;
 use super::{Location, Scene, SceneError};
 use crate::dynamics::{
     BodyBuilder, BodyId, ColliderBuilder, CollisionGroups, CouplingBuilder, ForceElement, FreeAxis,
-    GeometricStiffness, WatchdogSettings,
+    ChainBuilder, ChainEnd, ChainShape, GeometricStiffness, WatchdogSettings,
     JointBuilder, JointFrames, JointKind, JointLimit, JointMotor, Material, ModelError, Shape, SpringDamper,
     World, WorldSettings, box_inertia, capsule_inertia, cylinder_inertia, sphere_inertia,
 };
@@ -465,6 +465,59 @@ impl Builder<'_> {
     }
 }
 
+impl Builder<'_> {
+    /// A `[[cable]]`: checked here (located errors), built by [`World::add_chain`].
+    fn add_cable(&mut self, span: &Range<usize>, d: &CableDef) -> R<()> {
+        let start = self.vec3(span, "start", d.start)?;
+        let direction = self.unit3(span, "direction", d.direction)?;
+        let length = self.positive(span, "length", d.length)?;
+        let diameter = self.positive(span, "diameter", d.diameter)?;
+        if d.segments == 0 || d.segments > 10_000 {
+            return Err(self.invalid(span, "segments", format!("{} segments (1 to 10000 allowed)", d.segments)));
+        }
+        let ell = length / d.segments as f64;
+        let mut cb = match d.mass {
+            // A given total mass (a rope with a fibre core, a chain) over capsules of the diameter.
+            Some(m) => {
+                let m = self.positive(span, "mass", m)?;
+                ChainBuilder::new(&d.name, start, direction, ell, m / d.segments as f64, d.segments)
+                    .shape(ChainShape::Capsule { radius: diameter / 2.0 })
+            }
+            None => ChainBuilder::new(&d.name, start, direction, ell, 1.0, d.segments).steel_rope(diameter),
+        };
+        let end = |name: Option<&str>, field: &str, absent: ChainEnd| -> R<ChainEnd> {
+            Ok(match name {
+                None => absent,
+                Some("world") => ChainEnd::World,
+                Some(n) => ChainEnd::Body(self.body(span, field, n)?),
+            })
+        };
+        cb = cb
+            .attach_start(end(d.a.as_deref(), "a", ChainEnd::World)?)
+            .attach_end(end(d.b.as_deref(), "b", ChainEnd::Free)?)
+            .compliance(self.non_negative(span, "compliance", d.compliance.unwrap_or(self.default_compliance))?);
+        if let Some([l, a]) = d.damping {
+            cb = cb.damping(self.non_negative(span, "damping", l)?, self.non_negative(span, "damping", a)?);
+        }
+        match (&d.drum, d.drum_radius) {
+            (Some(n), Some(r)) => {
+                let hinge = self
+                    .world
+                    .joint_id(n)
+                    .ok_or_else(|| self.invalid(span, "drum", format!("no joint named `{n}`")))?;
+                if d.a.is_some() {
+                    return Err(self.invalid(span, "a", "a cable on a drum starts at the drum's fairlead: drop `a`"));
+                }
+                cb = cb.drum(hinge, self.positive(span, "drum_radius", r)?);
+            }
+            (None, None) => {}
+            _ => return Err(self.invalid(span, "drum", "give both `drum` and `drum_radius`")),
+        }
+        self.world.add_chain(cb).map_err(|e| self.model(span, &d.name, e))?;
+        Ok(())
+    }
+}
+
 /// `{i}`, `{i-1}`, `{i+1}` in names of instance `i`.
 fn subst(s: &str, i: usize) -> String {
     if !s.contains('{') {
@@ -630,6 +683,9 @@ pub(crate) fn build(file: &str, text: &str) -> R<Scene> {
     }
     for d in &parsed.spring {
         b.add_spring(&d.span(), d.get_ref(), zero)?;
+    }
+    for d in &parsed.cable {
+        b.add_cable(&d.span(), d.get_ref())?;
     }
     for c in &parsed.coupling {
         let (span, d) = (c.span(), c.get_ref());
