@@ -697,18 +697,20 @@ pub(crate) fn build(file: &str, text: &str) -> R<Scene> {
         let mut cb = match (d.kind.as_str(), js.as_slice()) {
             ("gear", &[x, y]) => CouplingBuilder::gear(&d.name, x, y, ratio),
             ("differential", &[i, l, r]) => CouplingBuilder::differential(&d.name, i, l, r, ratio),
-            ("gear" | "differential", _) => {
+            ("rack", &[r, p]) => CouplingBuilder::rack(&d.name, r, p, ratio),
+            ("gear" | "differential" | "rack", _) => {
                 return Err(b.invalid(
                     &span,
                     "joints",
-                    "a gear couples 2 joints [a, b]; a differential 3 [input, left, right]",
+                    "a gear couples 2 joints [a, b]; a differential 3 [input, left, right]; a rack 2 \
+                     [slide, pinion]",
                 ));
             }
             (other, _) => {
                 return Err(b.invalid(
                     &span,
                     "type",
-                    format!("unknown coupling type `{other}` (gear, differential)"),
+                    format!("unknown coupling type `{other}` (gear, differential, rack)"),
                 ));
             }
         };
