@@ -459,7 +459,10 @@ pub fn summary_text(s: &RunSummary) -> String {
         s.max_body_speed_mps,
         s.finite,
         s.stable,
-        s.instability.as_deref().map(|e| format!("\nunstable ({} steps flagged): {e}", s.unstable_steps)).unwrap_or_default(),
+        s.instability
+            .as_deref()
+            .map(|e| format!("\nunstable ({} steps flagged): {e}", s.unstable_steps))
+            .unwrap_or_default(),
         s.error.as_deref().map(|e| format!("\nstopped early: {e}")).unwrap_or_default(),
         if s.dumped > 0 { format!("\nMLCP files written: {}", s.dumped) } else { String::new() },
     )

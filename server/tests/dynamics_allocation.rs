@@ -191,7 +191,10 @@ fn steps_allocate_nothing_once_warm() {
 fn loaded_cable_on_a_drum_allocates_nothing() {
     let mut w = World::new(WorldSettings::default()).unwrap();
     let drum = w
-        .add_body(BodyBuilder::dynamic("drum", 400.0, cylinder_inertia(400.0, 0.5, 0.3)).position(Vector3::new(0.0, 0.0, 22.0)))
+        .add_body(
+            BodyBuilder::dynamic("drum", 400.0, cylinder_inertia(400.0, 0.5, 0.3))
+                .position(Vector3::new(0.0, 0.0, 22.0)),
+        )
         .unwrap();
     let winch = w
         .add_joint(
@@ -203,7 +206,8 @@ fn loaded_cable_on_a_drum_allocates_nothing() {
     let dir = Vector3::new(tilt.sin(), 0.0, -tilt.cos());
     let start = Vector3::new(0.5, 0.0, 22.0);
     let end = start + dir * 20.0;
-    let load = w.add_body(BodyBuilder::dynamic("load", 2000.0, sphere_inertia(2000.0, 0.5)).position(end)).unwrap();
+    let load =
+        w.add_body(BodyBuilder::dynamic("load", 2000.0, sphere_inertia(2000.0, 0.5)).position(end)).unwrap();
     w.add_chain(
         ChainBuilder::new("rope", start, dir, 1.0, 3.5, 20)
             .steel_rope(0.03)

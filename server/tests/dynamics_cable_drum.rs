@@ -133,9 +133,19 @@ fn a_drum_hoists_two_tonnes_at_its_rate_with_the_tension_of_newtons_law() {
         }
         let a = if accelerating { R * ALPHA } else { 0.0 };
         let rise = R * s.drum_rate;
-        assert!((s.vz - rise).abs() <= 0.01 * rise.abs(), "t {:.3}: load rises at {} m/s, drum pays {rise}", s.t, s.vz);
+        assert!(
+            (s.vz - rise).abs() <= 0.01 * rise.abs(),
+            "t {:.3}: load rises at {} m/s, drum pays {rise}",
+            s.t,
+            s.vz
+        );
         let newton = M * (G + a);
-        assert!((s.tension - newton).abs() <= 0.01 * newton, "t {:.3}: tension {} N vs M (g + a) = {newton}", s.t, s.tension);
+        assert!(
+            (s.tension - newton).abs() <= 0.01 * newton,
+            "t {:.3}: tension {} N vs M (g + a) = {newton}",
+            s.t,
+            s.tension
+        );
         assert!((s.az - a).abs() <= 0.01 * (G + a), "t {:.3}: acceleration {} vs {a}", s.t, s.az);
         if accelerating { checked.0 += 1 } else { checked.1 += 1 }
     }
@@ -149,10 +159,7 @@ fn a_drum_hoists_two_tonnes_at_its_rate_with_the_tension_of_newtons_law() {
 #[test]
 fn without_geometric_stiffness_for_comparison() {
     let (samples, max_error) = run(GeometricStiffness::Off);
-    let worst = samples
-        .iter()
-        .filter(|s| s.t > 3.0)
-        .map(|s| (s.tension - M * G).abs() / (M * G))
-        .fold(0.0, f64::max);
+    let worst =
+        samples.iter().filter(|s| s.t > 3.0).map(|s| (s.tension - M * G).abs() / (M * G)).fold(0.0, f64::max);
     println!("geometric stiffness off: joint error {max_error:.3e} m, steady tension off by {worst:.3e}");
 }

@@ -23,7 +23,9 @@ fn sweep() {
         Ok("auto") => Variant::Auto,
         _ => Variant::Skyline,
     };
-    println!("mode      load_kg ratio    joint_err_m  max_speed  max_gain  final_E  period/ref  tension_N  step_us finite");
+    println!(
+        "mode      load_kg ratio    joint_err_m  max_speed  max_gain  final_E  period/ref  tension_N  step_us finite"
+    );
     for gs in GeometricStiffness::ALL {
         for &load in &loads {
             let r = run(load, angle, gs, variant, seconds);

@@ -64,7 +64,11 @@ fn without_geometric_stiffness_the_swing_breaks_and_the_watchdog_fires() {
         max_error = max_error.max(w.max_joint_error());
         dog.check(&w);
     }
-    println!("off, 500 kg: joint error {max_error:.3e} m, watchdog {:?} ({} steps)", dog.first(), dog.count());
+    println!(
+        "off, 500 kg: joint error {max_error:.3e} m, watchdog {:?} ({} steps)",
+        dog.first(),
+        dog.count()
+    );
     assert!(max_error > 0.1, "{max_error}");
     assert!(dog.count() > 0 && dog.first().is_some());
 

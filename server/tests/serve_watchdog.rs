@@ -28,7 +28,11 @@ fn run(scene: &str, ticks: usize) -> (usize, u16) {
 fn stats_frames_carry_the_watchdog() {
     assert_eq!(run("hanging_chain", 120), (0, 0));
 
-    let text = builtin("hanging_chain").unwrap().text.replacen("[scene]", "[scene]\ngeometric_stiffness = \"off\"", 1);
+    let text = builtin("hanging_chain").unwrap().text.replacen(
+        "[scene]",
+        "[scene]\ngeometric_stiffness = \"off\"",
+        1,
+    );
     let dir = std::env::temp_dir().join(format!("pivotsim-serve-watchdog-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let path = dir.join("chain_off.toml");

@@ -282,8 +282,11 @@ impl World {
         // Body z axis along u (a half turn about x when u points straight down).
         let q = UnitQuaternion::rotation_between(&Vector3::z(), &u)
             .unwrap_or_else(|| UnitQuaternion::from_axis_angle(&Vector3::x_axis(), std::f64::consts::PI));
-        let mut chain =
-            Chain { bodies: Vec::with_capacity(cb.count), joints: Vec::with_capacity(cb.count + 1), drum: None };
+        let mut chain = Chain {
+            bodies: Vec::with_capacity(cb.count),
+            joints: Vec::with_capacity(cb.count + 1),
+            drum: None,
+        };
         for i in 0..cb.count {
             let body = BodyBuilder::dynamic(&cb.segment_name(i), cb.segment_mass, inertia)
                 .position(cb.start + u * ((i as f64 + 0.5) * l))

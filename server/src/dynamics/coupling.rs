@@ -119,7 +119,9 @@ impl CouplingKind {
             CouplingKind::Differential { input, left, right, ratio } => {
                 ([(input, 1.0), (left, -0.5 * ratio), (right, -0.5 * ratio)], 3)
             }
-            CouplingKind::Rack { rack, pinion, radius } => ([(rack, 1.0), (pinion, -radius), (pinion, 0.0)], 2),
+            CouplingKind::Rack { rack, pinion, radius } => {
+                ([(rack, 1.0), (pinion, -radius), (pinion, 0.0)], 2)
+            }
         }
     }
 

@@ -46,11 +46,11 @@ mod tests {
     use rand_chacha::ChaCha8Rng;
 
     use super::*;
-    use crate::dynamics::motor::FreeAxis;
     use crate::dynamics::body::BodyId;
     use crate::dynamics::coupling::{CouplingBuilder, CouplingId};
     use crate::dynamics::error::CouplingError;
     use crate::dynamics::joint::{DEFAULT_COMPLIANCE, JOINT_SLOTS, JointId, JointKind};
+    use crate::dynamics::motor::FreeAxis;
     use crate::dynamics::rows::MAX_ROW_BODIES;
 
     fn v3(rng: &mut ChaCha8Rng, s: f64) -> Vector3<f64> {

@@ -187,7 +187,9 @@ fn row_def(joint: &Joint, row: JointRow) -> Option<(RowDef, f64)> {
 pub(crate) fn linear_row_axes(kind: JointKind) -> &'static [(usize, usize)] {
     match kind {
         JointKind::Prismatic | JointKind::Cylindrical => &[(0, 1), (1, 2)],
-        JointKind::Fixed | JointKind::Hinge | JointKind::Ball | JointKind::Universal => &[(0, 0), (1, 1), (2, 2)],
+        JointKind::Fixed | JointKind::Hinge | JointKind::Ball | JointKind::Universal => {
+            &[(0, 0), (1, 1), (2, 2)]
+        }
     }
 }
 

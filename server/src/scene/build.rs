@@ -21,10 +21,10 @@ use super::controls::{
 use super::format::*;
 use super::{Location, Scene, SceneError};
 use crate::dynamics::{
-    BodyBuilder, BodyId, ColliderBuilder, CollisionGroups, CouplingBuilder, ForceElement, FreeAxis,
-    ChainBuilder, ChainEnd, ChainShape, GeometricStiffness, WatchdogSettings,
-    JointBuilder, JointFrames, JointKind, JointLimit, JointMotor, Material, ModelError, Shape, SpringDamper,
-    World, WorldSettings, box_inertia, capsule_inertia, cylinder_inertia, sphere_inertia,
+    BodyBuilder, BodyId, ChainBuilder, ChainEnd, ChainShape, ColliderBuilder, CollisionGroups,
+    CouplingBuilder, ForceElement, FreeAxis, GeometricStiffness, JointBuilder, JointFrames, JointKind,
+    JointLimit, JointMotor, Material, ModelError, Shape, SpringDamper, WatchdogSettings, World,
+    WorldSettings, box_inertia, capsule_inertia, cylinder_inertia, sphere_inertia,
 };
 
 /// Source text with a line index, for locating spans.
@@ -473,7 +473,11 @@ impl Builder<'_> {
         let length = self.positive(span, "length", d.length)?;
         let diameter = self.positive(span, "diameter", d.diameter)?;
         if d.segments == 0 || d.segments > 10_000 {
-            return Err(self.invalid(span, "segments", format!("{} segments (1 to 10000 allowed)", d.segments)));
+            return Err(self.invalid(
+                span,
+                "segments",
+                format!("{} segments (1 to 10000 allowed)", d.segments),
+            ));
         }
         let ell = length / d.segments as f64;
         let mut cb = match d.mass {
@@ -495,7 +499,11 @@ impl Builder<'_> {
         cb = cb
             .attach_start(end(d.a.as_deref(), "a", ChainEnd::World)?)
             .attach_end(end(d.b.as_deref(), "b", ChainEnd::Free)?)
-            .compliance(self.non_negative(span, "compliance", d.compliance.unwrap_or(self.default_compliance))?);
+            .compliance(self.non_negative(
+                span,
+                "compliance",
+                d.compliance.unwrap_or(self.default_compliance),
+            )?);
         if let Some([l, a]) = d.damping {
             cb = cb.damping(self.non_negative(span, "damping", l)?, self.non_negative(span, "damping", a)?);
         }
@@ -506,7 +514,11 @@ impl Builder<'_> {
                     .joint_id(n)
                     .ok_or_else(|| self.invalid(span, "drum", format!("no joint named `{n}`")))?;
                 if d.a.is_some() {
-                    return Err(self.invalid(span, "a", "a cable on a drum starts at the drum's fairlead: drop `a`"));
+                    return Err(self.invalid(
+                        span,
+                        "a",
+                        "a cable on a drum starts at the drum's fairlead: drop `a`",
+                    ));
                 }
                 cb = cb.drum(hinge, self.positive(span, "drum_radius", r)?);
             }
@@ -588,7 +600,11 @@ pub(crate) fn build(file: &str, text: &str) -> R<Scene> {
     }
     if let Some(g) = &sec.geometric_stiffness {
         settings.geometric_stiffness = GeometricStiffness::from_name(g).ok_or_else(|| {
-            probe.invalid(&sspan, "geometric_stiffness", format!("unknown mode `{g}` (implicit, inertial, off)"))
+            probe.invalid(
+                &sspan,
+                "geometric_stiffness",
+                format!("unknown mode `{g}` (implicit, inertial, off)"),
+            )
         })?;
     }
     let mut watchdog = WatchdogSettings::default();

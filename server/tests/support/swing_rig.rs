@@ -48,8 +48,9 @@ pub fn world(load: f64, angle_deg: f64, gs: GeometricStiffness, variant: Variant
     let a = angle_deg.to_radians();
     let d = Vector3::new(a.sin(), 0.0, -a.cos());
     let top = Vector3::new(0.0, 0.0, HOOK);
-    let q = nalgebra::UnitQuaternion::rotation_between(&Vector3::z(), &d)
-        .unwrap_or_else(|| nalgebra::UnitQuaternion::from_axis_angle(&Vector3::x_axis(), std::f64::consts::PI));
+    let q = nalgebra::UnitQuaternion::rotation_between(&Vector3::z(), &d).unwrap_or_else(|| {
+        nalgebra::UnitQuaternion::from_axis_angle(&Vector3::x_axis(), std::f64::consts::PI)
+    });
     let inertia = capsule_inertia(M_LINK, 0.01, 0.04);
     let mut prev = None;
     for i in 0..LINKS {
