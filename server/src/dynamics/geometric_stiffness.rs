@@ -189,7 +189,7 @@ pub(crate) fn accumulate(
 /// moments `principal` at step `h` (module doc).
 pub(crate) fn weight(k: &Matrix3<f64>, principal: &Vector3<f64>, h: f64) -> f64 {
     let i_min = principal.min();
-    if !(i_min > 0.0) {
+    if i_min.is_nan() || i_min <= 0.0 {
         return 0.0;
     }
     // The Frobenius norm bounds λ_max of the PSD K̃ from above, cheaply.

@@ -14,7 +14,9 @@
 //! `v⁺ = v + M⁻¹ (h f + Jᵀ λ)` and `x⁺ = x + h v⁺`, `q⁺ = normalize(exp(h ω⁺/2) ⊗ q)`. The rows are
 //! those of joints (locked axes, limits, velocity and position motors), couplings (gears,
 //! differentials, clutches: one row on up to four bodies) and spring–dampers (implicit force rows);
-//! buoyancy and drag enter `f` linearly implicitly (`force.rs`).
+//! buoyancy and drag enter `f` linearly implicitly (`force.rs`). Bodies whose joints carry loads
+//! large enough to make the step unstable get the joints' geometric stiffness in their effective
+//! mass, `M̃ = M + h² K̃` (`geometric_stiffness.rs`), in place of `M` above.
 //!
 //! | file | concept |
 //! |---|---|

@@ -7,14 +7,17 @@
 //!   2. v₀ = v/(1 + h d),  ω₀ = ω̃/(1 + h d_ω)          (ω̃: implicit gyroscopic update, below;
 //!                                                       d, d_ω: body damping rates, body.rs)
 //!      v_free = v₀ + h f / m,  ω_free = ω₀ + h I_w⁻¹ τ, or with implicit elements
-//!      (v_free, ω_free) = (v₀, ω₀) + (M − h D − h² K)⁻¹ (h f + h² K (v₀, ω₀))
+//!      (v_free, ω_free) = (v₀, ω₀) + (M − h D − h² K)⁻¹ (h f + h² K (v₀, ω₀));
+//!      for a body whose joints are loaded, I_w → Ĩ = I_w + α h² K̃ (the joints' geometric
+//!      stiffness from the previous step's impulses) and h τ → h τ − α h² K̃ ω₀ (the implicit
+//!      mode; geometric_stiffness.rs, eq. G2–G4): M̃ replaces M in steps 5–6
 //!   3. rows of every joint, coupling and spring at the current poses
 //!                                                      (joint_rows.rs, coupling_rows.rs, force.rs)
 //!      then of every contact point (contact/)
 //!   4. islands by union–find over rows joining dynamic bodies
-//!   5. per island: A = J M⁻¹ Jᵀ + C/h², b = r − J v_free (eq. 2); solve the boxed MLCP (eq. 3)
+//!   5. per island: A = J M̃⁻¹ Jᵀ + C/h², b = r − J v_free (eq. 2); solve the boxed MLCP (eq. 3)
 //!      warm-started from the previous step's index set and impulses of the same rows
-//!   6. v⁺ = v_free + M⁻¹ Jᵀ λ                          (eq. 1, first line)
+//!   6. v⁺ = v_free + M̃⁻¹ Jᵀ λ                          (eq. 1, first line)
 //!   7. x⁺ = x + h v⁺,   q⁺ = normalize(exp(h ω⁺/2) ⊗ q)  (ω world frame; = q ⊗ exp(h ω_body/2))
 //!   8. optional position projection (projection.rs), then commit
 //! ```

@@ -115,7 +115,7 @@ impl Watchdog {
         let gain = k + world.potential_energy() - self.e0 - w_in;
         let margin = self.settings.energy_margin * self.k_max.max(w_in.abs()).max(self.floor);
         let time = world.time();
-        let found = if !(gain <= margin) {
+        let found = if gain.is_nan() || gain > margin {
             Some(Instability::EnergyGain { time, gain, margin })
         } else {
             let bound = self.settings.max_speed;
@@ -124,7 +124,7 @@ impl Watchdog {
                 .iter()
                 .filter(|b| b.is_dynamic())
                 .map(|b| (b, b.linvel().norm()))
-                .find(|(_, v)| !(*v <= bound))
+                .find(|&(_, v)| v.is_nan() || v > bound)
                 .map(|(b, speed)| Instability::Speed { time, body: b.name().to_string(), speed, bound })
         };
         if let Some(i) = &found {
