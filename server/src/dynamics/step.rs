@@ -112,8 +112,9 @@ pub(crate) struct StepWorkspace {
     pub proj_motion: Vec<BodyMotion>,
     pub dv: Vec<Vector3<f64>>,
     pub dw: Vec<Vector3<f64>>,
-    /// Geometric stiffness `K̃` per body (world-indexed; `geometric_stiffness.rs`).
-    pub stiffness: Vec<Matrix3<f64>>,
+    /// Geometric stiffness `K̃` per body and its largest loaded lever arm squared (world-indexed;
+    /// `geometric_stiffness.rs`).
+    pub stiffness: Vec<(Matrix3<f64>, f64)>,
     /// Bodies whose inertia the geometric stiffness raised in the last step.
     pub gs_bodies: usize,
     /// Work done on the dynamic bodies since the world was built by everything that is not
@@ -238,8 +239,8 @@ impl StepWorkspace {
                         (b.linvel / (1.0 + h * b.linear_damping()), w0 / (1.0 + h * b.angular_damping()));
                     // Geometric stiffness (geometric_stiffness.rs, G2–G3): Ĩ = I + α h² K̃.
                     let mut gs = Matrix3::zeros();
-                    if let Some(k) = self.stiffness.get(i) {
-                        let alpha = geometric_stiffness::weight(k, &b.principal_inertia(), h);
+                    if let Some((k, r2)) = self.stiffness.get(i) {
+                        let alpha = geometric_stiffness::weight(k, *r2, b.mass(), &b.principal_inertia(), h);
                         if alpha > 0.0
                             && let Some(inv) = (b.inertia_world() + k * (alpha * h * h)).try_inverse()
                         {
