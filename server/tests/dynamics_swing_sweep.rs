@@ -71,3 +71,31 @@ fn trace() {
         }
     }
 }
+
+/// Cost per step (release; medians over `COST_RUNS` runs, 5 by default), for the note.
+#[test]
+#[ignore]
+fn cost() {
+    let runs: usize = std::env::var("COST_RUNS").ok().and_then(|s| s.parse().ok()).unwrap_or(5);
+    let cases: [(&str, f64, f64, GeometricStiffness); 6] = [
+        ("swing 5 kg", 5.0, 30.0, GeometricStiffness::Implicit),
+        ("swing 500 kg", 500.0, 30.0, GeometricStiffness::Implicit),
+        ("swing 5 t", 5000.0, 30.0, GeometricStiffness::Implicit),
+        ("hang 5 kg", 5.0, 0.0, GeometricStiffness::Implicit),
+        ("hang 5 kg", 5.0, 0.0, GeometricStiffness::Off),
+        ("hang 5 kg", 5.0, 0.0, GeometricStiffness::Inertial),
+    ];
+    for (what, load, angle, gs) in cases {
+        let mut t: Vec<f64> = (0..runs).map(|_| run(load, angle, gs, Variant::Skyline, 20.0).step_us).collect();
+        t.sort_by(f64::total_cmp);
+        let r = run(load, angle, gs, Variant::Skyline, 20.0);
+        println!(
+            "{what:12} {:9}: median {:.1} µs/step (min {:.1}, max {:.1}), joint error {:.2e} m",
+            gs.name(),
+            t[runs / 2],
+            t[0],
+            t[runs - 1],
+            r.max_joint_error
+        );
+    }
+}
