@@ -86,7 +86,8 @@ fn cost() {
         ("hang 5 kg", 5.0, 0.0, GeometricStiffness::Inertial),
     ];
     for (what, load, angle, gs) in cases {
-        let mut t: Vec<f64> = (0..runs).map(|_| run(load, angle, gs, Variant::Skyline, 20.0).step_us).collect();
+        let mut t: Vec<f64> =
+            (0..runs).map(|_| run(load, angle, gs, Variant::Skyline, 20.0).step_us).collect();
         t.sort_by(f64::total_cmp);
         let r = run(load, angle, gs, Variant::Skyline, 20.0);
         println!(
