@@ -19,7 +19,8 @@
 //!             80    64  inputs_rejected   u64 × 8, since start, indexed by RejectReason code
 //!            144     4  deadman_trips     u32, since start
 //!            148     1  deadman_active    u8, 0 or 1: actuators are held at neutral now
-//!            149     3  reserved          0
+//!            149     1  unstable          u8, 0 or 1: the server's instability watchdog flagged this step
+//!            150     2  unstable_steps    u16, steps flagged since the scene was (re)loaded, saturating
 //!            152    40  island record × island_count
 //!
 //! island record   size  field
@@ -161,6 +162,11 @@ pub struct SolverStats {
     pub inputs: InputHealth,
     /// Per-island records.
     pub islands: Vec<IslandStats>,
+    /// The server's instability watchdog flagged this step (energy gained beyond the initial
+    /// energy and the inputs' work, or a body beyond the scene's speed bound).
+    pub unstable: bool,
+    /// Steps the watchdog flagged since the scene was (re)loaded, saturating at 65 535.
+    pub unstable_steps: u16,
 }
 
 /// What is wrong with the content of a stats frame.
@@ -227,6 +233,12 @@ pub enum StatsError {
     /// `deadman_active` byte neither 0 nor 1.
     #[error("deadman_active byte {value} (must be 0 or 1)")]
     DeadmanFlag {
+        /// The byte.
+        value: u8,
+    },
+    /// `unstable` byte neither 0 nor 1.
+    #[error("unstable byte {value} (must be 0 or 1)")]
+    UnstableFlag {
         /// The byte.
         value: u8,
     },
@@ -336,7 +348,8 @@ impl SolverStats {
             buf.extend_from_slice(&v.to_le_bytes());
         }
         buf.extend_from_slice(&self.inputs.deadman_trips.to_le_bytes());
-        buf.extend_from_slice(&[u8::from(self.inputs.deadman_active), 0, 0, 0]);
+        buf.extend_from_slice(&[u8::from(self.inputs.deadman_active), u8::from(self.unstable)]);
+        buf.extend_from_slice(&self.unstable_steps.to_le_bytes());
         for i in &self.islands {
             i.write(buf);
         }
@@ -367,11 +380,16 @@ impl SolverStats {
         if p.len() != expected {
             return Err(FrameError::PayloadLength { kind, expected, found: p.len() }.into());
         }
-        header::check_reserved(p, 149..152, HEADER_LEN)?;
         let deadman = p[148];
         if deadman > 1 {
             return Err(DecodeError::Invalid(StatsError::DeadmanFlag { value: deadman }));
         }
+        let unstable = p[149];
+        if unstable > 1 {
+            return Err(DecodeError::Invalid(StatsError::UnstableFlag { value: unstable }));
+        }
+        self.unstable = unstable == 1;
+        self.unstable_steps = u16::from_le_bytes([p[150], p[151]]);
         self.sequence = le::u64_at(p, 0);
         self.sim_time = le::f64_at(p, 8);
         self.step_wall_us = le::f64_at(p, 16);
@@ -434,6 +452,7 @@ mod tests {
             totals: StepTotals::from_islands(&islands),
             inputs: InputHealth::default(),
             islands,
+            ..Default::default()
         };
         s.inputs.reject(RejectReason::Stale);
         s.inputs.deadman_active = true;
@@ -445,6 +464,16 @@ mod tests {
         assert_eq!(SolverStats::decode(&buf).unwrap(), s);
         assert_eq!(s.inputs.rejected_for(RejectReason::Stale), 1);
         assert_eq!(s.inputs.rejected_total(), 1);
+    }
+
+    #[test]
+    fn watchdog_fields_round_trip_and_bad_flag_is_refused() {
+        let s = SolverStats { unstable: true, unstable_steps: 65_535, ..Default::default() };
+        let mut b = Vec::new();
+        s.encode(&mut b).unwrap();
+        assert_eq!(SolverStats::decode(&b).unwrap(), s);
+        b[HEADER_LEN + 149] = 2;
+        assert_eq!(SolverStats::decode(&b), Err(DecodeError::Invalid(StatsError::UnstableFlag { value: 2 })));
     }
 
     #[test]

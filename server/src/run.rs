@@ -10,7 +10,11 @@
 //! - *tight fraction*: tight rows over rows of an island (the share of variables at a bound);
 //! - *joint error*: [`World::max_joint_error`] after the step (anchor separation across locked
 //!   directions), the largest over the run;
-//! - *finite*: no step ever failed on a NaN/Inf state or problem (the run stops at the first).
+//! - *finite*: no step ever failed on a NaN/Inf state or problem (the run stops at the first);
+//! - *stable*: finite, and the instability watchdog ([`Watchdog`], `dynamics/watchdog.rs`) never
+//!   fired: the world never gained energy beyond its initial energy and its inputs' work by the
+//!   scene's margin, and no body outran the scene's speed bound. `instability` says what fired
+//!   first, `unstable_steps` in how many steps.
 
 use std::fs::File;
 use std::io::{BufWriter, Write};
@@ -21,7 +25,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 use serde::Serialize;
 use thiserror::Error;
 
-use crate::dynamics::{IslandStats, World};
+use crate::dynamics::{IslandStats, Watchdog, World};
 use crate::scene::{Scene, SceneStepError};
 use crate::solver::{SolveStatus, Variant, io};
 
@@ -103,6 +107,12 @@ pub struct RunSummary {
     pub solves_other: u64,
     /// No NaN/Inf ever appeared.
     pub finite: bool,
+    /// Finite and the instability watchdog never fired.
+    pub stable: bool,
+    /// What the watchdog found first (energy gain or speed), if it fired.
+    pub instability: Option<String>,
+    /// Steps the watchdog flagged.
+    pub unstable_steps: u64,
     /// Why the run stopped early, if it did.
     pub error: Option<String>,
     /// Island problems written by `--dump-mlcp`.
@@ -269,6 +279,9 @@ pub fn run_scene_observed(
         solves_max_steps: 0,
         solves_other: 0,
         finite: true,
+        stable: true,
+        instability: None,
+        unstable_steps: 0,
         error: None,
         dumped: 0,
         mean_island_solve_us: 0.0,
@@ -278,6 +291,7 @@ pub fn run_scene_observed(
     };
     let mut hard = HardSolves::new(if opts.dump_mlcp.is_some() { opts.dump_hard } else { 0 });
     let mut acc = Acc { solve_us: Vec::with_capacity(steps as usize), ..Acc::default() };
+    let mut watchdog = Watchdog::new(&scene.world, scene.watchdog);
     let start = Instant::now();
     let tick = (steps / 200).max(1);
     for n in 0..steps {
@@ -299,6 +313,11 @@ pub fn run_scene_observed(
         let step = world.steps();
         let time = world.time();
         record_step(world, &mut sum, &mut acc);
+        if let Some(i) = watchdog.check(world)
+            && watchdog.count() == 1
+        {
+            bar.suspend(|| eprintln!("warning: {}: unstable: {i}", scene.name));
+        }
         on_step(world);
         if let (Some(w), Some(path)) = (stats_w.as_mut(), &stats_path) {
             for s in world.island_stats() {
@@ -364,6 +383,9 @@ pub fn run_scene_observed(
         }
     }
     sum.wall_s = start.elapsed().as_secs_f64();
+    sum.unstable_steps = watchdog.count();
+    sum.instability = watchdog.first().map(ToString::to_string);
+    sum.stable = sum.finite && sum.instability.is_none();
     sum.steps = acc.solve_us.len() as u64;
     sum.sim_time_s = scene.world.time();
     sum.realtime_factor = if sum.wall_s > 0.0 { sum.sim_time_s / sum.wall_s } else { 0.0 };
@@ -480,7 +502,7 @@ pub fn summary_text(s: &RunSummary) -> String {
          solve per step: mean {:.1} µs, p99 {:.1} µs, max {:.1} µs; step mean {:.1} µs\n\
          pivots per solve: mean {:.2}, max {}; tight fraction max {:.3}, mean (largest island) {:.3}\n\
          solves: {} converged, {} inexact, {} at the step cap, {} other; max relative residual {:.2e}\n\
-         joint error max {:.3e} m; body speed max {:.3} m/s; finite: {}{}{}",
+         joint error max {:.3e} m; body speed max {:.3} m/s; finite: {}; stable: {}{}{}{}",
         s.scene,
         s.variant,
         s.steps,
@@ -507,6 +529,11 @@ pub fn summary_text(s: &RunSummary) -> String {
         s.max_joint_error_m,
         s.max_body_speed_mps,
         s.finite,
+        s.stable,
+        s.instability
+            .as_deref()
+            .map(|e| format!("\nunstable ({} steps flagged): {e}", s.unstable_steps))
+            .unwrap_or_default(),
         s.error.as_deref().map(|e| format!("\nstopped early: {e}")).unwrap_or_default(),
         if s.dumped > 0 { format!("\nMLCP files written: {}", s.dumped) } else { String::new() },
     )

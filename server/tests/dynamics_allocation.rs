@@ -4,12 +4,15 @@
 //! (with and without projection) and over a machine scene with every other row kind and element:
 //! cylindrical and universal joints, position motors on both free axes, a gear, a differential and a
 //! slipping clutch (rows on three and four bodies), a spring–damper row, a buoyant float with waves
-//! (the implicit 6 × 6 solve) and a cable from the chain helper.
+//! (the implicit 6 × 6 solve) and a cable from the chain helper; and over a 2 t load on a steel
+//! cable wound by a drum (fairlead, rack coupling) and a heavy load swinging on a light chain, where
+//! the geometric stiffness of the loaded joints is active (issue 12).
 
 use nalgebra::Vector3;
 use pivotsim_server::dynamics::{
     BodyBuilder, Buoyancy, ChainBuilder, ChainEnd, CouplingBuilder, ForceElement, FreeAxis, JointBuilder,
-    JointLimit, JointMotor, SpringDamper, Water, Wave, World, WorldSettings, box_inertia, sphere_inertia,
+    JointLimit, JointMotor, SpringDamper, Water, Wave, World, WorldSettings, box_inertia, cylinder_inertia,
+    sphere_inertia,
 };
 
 #[path = "support/counting_alloc.rs"]
@@ -180,4 +183,43 @@ fn steps_allocate_nothing_once_warm() {
         per_solve.push(per_step / solves as f64);
     }
     assert!(per_solve.iter().all(|&p| p == 0.0), "{per_solve:?}");
+}
+
+/// A 2 t load hoisted by a drum on a 20-segment steel cable, swinging: the geometric stiffness is
+/// on every segment, the rack coupling and the fairlead's limit take part.
+#[test]
+fn loaded_cable_on_a_drum_allocates_nothing() {
+    let mut w = World::new(WorldSettings::default()).unwrap();
+    let drum = w
+        .add_body(
+            BodyBuilder::dynamic("drum", 400.0, cylinder_inertia(400.0, 0.5, 0.3))
+                .position(Vector3::new(0.0, 0.0, 22.0)),
+        )
+        .unwrap();
+    let winch = w
+        .add_joint(
+            JointBuilder::hinge("winch", drum, None, Vector3::new(0.0, 0.0, 22.0), -Vector3::y())
+                .motor(JointMotor::velocity(0.2, 1e6)),
+        )
+        .unwrap();
+    let tilt: f64 = 0.2;
+    let dir = Vector3::new(tilt.sin(), 0.0, -tilt.cos());
+    let start = Vector3::new(0.5, 0.0, 22.0);
+    let end = start + dir * 20.0;
+    let load =
+        w.add_body(BodyBuilder::dynamic("load", 2000.0, sphere_inertia(2000.0, 0.5)).position(end)).unwrap();
+    w.add_chain(
+        ChainBuilder::new("rope", start, dir, 1.0, 3.5, 20)
+            .steel_rope(0.03)
+            .attach_end(ChainEnd::Body(load))
+            .drum(winch, 0.5),
+    )
+    .unwrap();
+    let (per_step, solves) = allocations_per_step(&mut w);
+    println!(
+        "drum hoist: {per_step} allocations per step, {solves} solves, geometric stiffness on {} bodies",
+        w.geometric_stiffness_bodies()
+    );
+    assert!(w.geometric_stiffness_bodies() >= 20);
+    assert_eq!(per_step, 0.0);
 }

@@ -117,6 +117,8 @@ pub fn solver_stats() -> impl Strategy<Value = SolverStats> {
                 totals,
                 inputs: InputHealth { accepted, rejected, deadman_trips, deadman_active },
                 islands,
+                unstable: sequence % 2 == 1,
+                unstable_steps: overruns as u16,
             }
         })
 }

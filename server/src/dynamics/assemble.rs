@@ -9,7 +9,10 @@
 //!   b_i  = r_i − Σ_{k ∈ blocks(i)} J_{i,k} v_{free,k},
 //! ```
 //!
-//! where the sum in `b` runs over every block of row `i`, including kinematic bodies (their scripted
+//! where `M_k` is the body's effective mass matrix — its inertia raised by the geometric stiffness
+//! of its loaded joints, `Ĩ_k = I_k + α h² K̃_k` (`geometric_stiffness.rs`), which keeps `M_k` block
+//! diagonal and `A` symmetric positive definite with the same pattern — and the sum in `b` runs
+//! over every block of row `i`, including kinematic bodies (their scripted
 //! velocity), and the sum in `A` only over dynamic ones (infinite mass contributes nothing).
 //! `W_{i,k} = M_k⁻¹ J_{i,k}ᵀ` is formed once per row and block; `A` is built row by row by walking,
 //! for each body of row `i`, the rows touching that body (a per-body list of (row, block) pairs),

@@ -14,6 +14,22 @@
 //! rope's segments overlap at the joints) or of a box of square cross-section `2w × 2w × ℓ`
 //! ([`box_inertia`]: chain links).
 //!
+//! **Steel wire rope.** [`steel_rope_mass_per_metre`] gives the mass of a stranded steel rope of
+//! diameter `d`: `μ = φ ρ π d² / 4` with steel's `ρ = 7850 kg/m³` and a metallic fill factor
+//! `φ = 0.68` (a 1" 6 × 36 rope with a steel core: 2.70 kg/m, catalogue 1.85 lb/ft = 2.75 kg/m);
+//! [`ChainBuilder::steel_rope`] makes the segments capsules of radius `d/2` with that mass.
+//!
+//! **Drum (winding in and paying out).** With [`ChainBuilder::drum`] the start is not a ball joint
+//! but a *fairlead*: a prismatic joint `"{name}/fairlead"` between segment 0 and the drum hinge's
+//! housing (its body B, or the world) along `−u`, into the drum, whose slide `s` (m wound in, from
+//! 0 at build time, limits `[0, ℓ]`) is tied to the drum's rotation `θ` by a rack coupling
+//! `"{name}/drum"` (`coupling.rs`): `ṡ = R θ̇`, `R` the drum's pitch radius. The drum's positive
+//! rotation about its hinge axis winds the cable in, the negative pays it out; the cable's tension
+//! `T` loads the drum with the torque `R T` through the coupling's impulse, so a motor on the
+//! hinge sees the real load. The wound part leaves the scene along the fairlead line (it is not
+//! laid on the drum's surface: no contact is involved), which bounds one build's winding to one
+//! segment length `ℓ`; winding further needs the next segment moved onto the fairlead (not done).
+//!
 //! **Statics.** Hanging from a fixed point, the chain is a vertical line of length `N ℓ` plus the
 //! compliance stretch: the ball joint `i` carries the weight of the segments below it, `(N − i) m g`,
 //! and its rows (implicit springs of stiffness `1/c`, `rows.rs`) stretch by `c (N − i) m g`, so
@@ -24,9 +40,17 @@
 use nalgebra::{UnitQuaternion, Vector3};
 
 use super::body::{BodyBuilder, BodyId, box_inertia, capsule_inertia};
+use super::coupling::{CouplingBuilder, CouplingId};
 use super::error::ChainError;
-use super::joint::{DEFAULT_COMPLIANCE, JointBuilder, JointId};
+use super::joint::{DEFAULT_COMPLIANCE, JointBuilder, JointId, JointKind};
+use super::motor::JointLimit;
 use super::world::World;
+
+/// Mass per metre (kg/m) of a stranded steel wire rope of diameter `d` (m): `0.68 · 7850 · π d²/4`
+/// (module doc).
+pub fn steel_rope_mass_per_metre(diameter: f64) -> f64 {
+    0.68 * 7850.0 * std::f64::consts::PI * diameter * diameter / 4.0
+}
 
 /// Cross-section of the segments.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -69,6 +93,7 @@ pub struct ChainBuilder {
     compliance: f64,
     linear_damping: f64,
     angular_damping: f64,
+    drum: Option<(JointId, f64)>,
 }
 
 impl ChainBuilder {
@@ -95,7 +120,23 @@ impl ChainBuilder {
             compliance: DEFAULT_COMPLIANCE,
             linear_damping: 0.0,
             angular_damping: 0.0,
+            drum: None,
         }
+    }
+
+    /// Steel wire rope of diameter `d`: capsule segments of radius `d/2` and the rope's mass
+    /// ([`steel_rope_mass_per_metre`]) per segment length.
+    pub fn steel_rope(mut self, diameter: f64) -> Self {
+        self.shape = ChainShape::Capsule { radius: diameter / 2.0 };
+        self.segment_mass = steel_rope_mass_per_metre(diameter) * self.segment_length;
+        self
+    }
+
+    /// Wound on the drum turning on the hinge `hinge`, of pitch radius `radius` (m): the start is
+    /// a fairlead tied to the drum by a rack coupling (module doc); replaces the start attachment.
+    pub fn drum(mut self, hinge: JointId, radius: f64) -> Self {
+        self.drum = Some((hinge, radius));
+        self
     }
 
     /// Segment cross-section.
@@ -161,6 +202,19 @@ impl ChainBuilder {
                 return bad(what, v);
             }
         }
+        if let Some((hinge, radius)) = self.drum {
+            if !(radius.is_finite() && radius > 0.0) {
+                return bad("drum radius", radius);
+            }
+            if world.joint(hinge).is_none() {
+                return Err(ChainError::UnknownJoint { chain: chain(), joint: hinge });
+            }
+            for name in ["fairlead", "drum"].map(|s| format!("{}/{s}", self.name)) {
+                if world.joint_id(&name).is_some() || world.coupling_id(&name).is_some() {
+                    return Err(ChainError::NameTaken { chain: chain(), name });
+                }
+            }
+        }
         let far = self.count as f64 * self.segment_length;
         if self.count == 0 || !(self.start + self.direction * far).iter().all(|c| c.is_finite()) {
             return bad("count", self.count as f64);
@@ -206,8 +260,10 @@ pub struct Chain {
     /// Segment bodies `0..N`.
     pub bodies: Vec<BodyId>,
     /// Ball joints: the start attachment (if any), the `N − 1` joints between segments, the end
-    /// attachment (if any).
+    /// attachment (if any); with a drum the fairlead (prismatic) comes first.
     pub joints: Vec<JointId>,
+    /// The rack coupling of the drum, if wound on one.
+    pub drum: Option<CouplingId>,
 }
 
 impl World {
@@ -226,8 +282,11 @@ impl World {
         // Body z axis along u (a half turn about x when u points straight down).
         let q = UnitQuaternion::rotation_between(&Vector3::z(), &u)
             .unwrap_or_else(|| UnitQuaternion::from_axis_angle(&Vector3::x_axis(), std::f64::consts::PI));
-        let mut chain =
-            Chain { bodies: Vec::with_capacity(cb.count), joints: Vec::with_capacity(cb.count + 1) };
+        let mut chain = Chain {
+            bodies: Vec::with_capacity(cb.count),
+            joints: Vec::with_capacity(cb.count + 1),
+            drum: None,
+        };
         for i in 0..cb.count {
             let body = BodyBuilder::dynamic(&cb.segment_name(i), cb.segment_mass, inertia)
                 .position(cb.start + u * ((i as f64 + 0.5) * l))
@@ -245,7 +304,24 @@ impl World {
             JointBuilder::at(&name, super::JointKind::Ball, a, b, cb.start + u * at, u)
                 .compliance(cb.compliance)
         };
-        if let Some(parent) = attach(cb.start_end) {
+        if let Some((hinge, radius)) = cb.drum {
+            let housing = self.joint(hinge).and_then(|j| j.body_b());
+            let fairlead = JointBuilder::at(
+                &format!("{}/fairlead", cb.name),
+                JointKind::Prismatic,
+                chain.bodies[0],
+                housing,
+                cb.start,
+                -u,
+            )
+            .compliance(cb.compliance)
+            .limit(JointLimit::new(0.0, l));
+            let fairlead = self.add_joint(fairlead)?;
+            chain.joints.push(fairlead);
+            let rack = CouplingBuilder::rack(&format!("{}/drum", cb.name), fairlead, hinge, radius)
+                .compliance(cb.compliance);
+            chain.drum = Some(self.add_coupling(rack)?);
+        } else if let Some(parent) = attach(cb.start_end) {
             chain.joints.push(self.add_joint(ball(
                 format!("{}/start", cb.name),
                 chain.bodies[0],

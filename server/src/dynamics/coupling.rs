@@ -12,6 +12,12 @@
 //! |---|---|---|
 //! | gear | `ω_a − ρ ω_b = 0` | `(1, −ρ)` |
 //! | differential | `ω_in − ρ (ω_left + ω_right) / 2 = 0` | `(1, −ρ/2, −ρ/2)` |
+//! | rack | `ṡ_rack − ρ ω_pinion = 0` | `(1, −ρ)` |
+//!
+//! A **rack** couples the *linear* free axis of a prismatic (or cylindrical) joint, `ṡ = −e₁ ·
+//! (v_A − v_B)` at the anchor (`joint_rows.rs`), to a pinion's rotation with `ρ` its pitch radius
+//! (m): a cable drum paying a cable in and out through its fairlead (`chain.rs`), a rack-and-pinion
+//! steering. Its impulse is then a force `λ / h` on the rack and a torque `ρ λ / h` on the pinion.
 //!
 //! with the ratio `ρ > 0` (the sense of rotation is carried by the joint axes: to reverse it,
 //! build one joint with the opposite axis). Its Jacobian is `J = Σ_t k_t J_{s,t}`, so its impulse
@@ -75,6 +81,15 @@ pub enum CouplingKind {
         /// Ratio `ρ > 0` (the final drive).
         ratio: f64,
     },
+    /// `ṡ_rack − radius · ω_pinion = 0`: a linear free axis driven by a rotation.
+    Rack {
+        /// The prismatic (or cylindrical) joint whose slide is driven (its force is the bounded one).
+        rack: JointId,
+        /// The hinge (or cylindrical) joint that turns.
+        pinion: JointId,
+        /// Pitch radius `ρ > 0` (m).
+        radius: f64,
+    },
 }
 
 impl CouplingKind {
@@ -83,6 +98,7 @@ impl CouplingKind {
         match self {
             CouplingKind::Gear { .. } => "gear",
             CouplingKind::Differential { .. } => "differential",
+            CouplingKind::Rack { .. } => "rack",
         }
     }
 
@@ -90,6 +106,7 @@ impl CouplingKind {
     pub fn ratio(&self) -> f64 {
         match *self {
             CouplingKind::Gear { ratio, .. } | CouplingKind::Differential { ratio, .. } => ratio,
+            CouplingKind::Rack { radius, .. } => radius,
         }
     }
 
@@ -102,6 +119,17 @@ impl CouplingKind {
             CouplingKind::Differential { input, left, right, ratio } => {
                 ([(input, 1.0), (left, -0.5 * ratio), (right, -0.5 * ratio)], 3)
             }
+            CouplingKind::Rack { rack, pinion, radius } => {
+                ([(rack, 1.0), (pinion, -radius), (pinion, 0.0)], 2)
+            }
+        }
+    }
+
+    /// The free axis of term `t` (a rack's first term is linear, every other term angular).
+    pub fn axis(&self, t: usize) -> FreeAxis {
+        match (self, t) {
+            (CouplingKind::Rack { .. }, 0) => FreeAxis::Linear,
+            _ => FreeAxis::Angular,
         }
     }
 }
@@ -129,6 +157,12 @@ impl CouplingBuilder {
     /// An open differential `ω_in = ratio · (ω_left + ω_right) / 2`.
     pub fn differential(name: &str, input: JointId, left: JointId, right: JointId, ratio: f64) -> Self {
         Self::new(name, CouplingKind::Differential { input, left, right, ratio })
+    }
+
+    /// A rack `ṡ_rack = radius · ω_pinion` between the slide of a prismatic (or cylindrical) joint
+    /// and the rotation of a hinge (or cylindrical) joint.
+    pub fn rack(name: &str, rack: JointId, pinion: JointId, radius: f64) -> Self {
+        Self::new(name, CouplingKind::Rack { rack, pinion, radius })
     }
 
     /// Row compliance `c ≥ 0` (rad/(N m); a velocity row: `J v⁺ = −c τ / h` at steady state).
@@ -168,7 +202,14 @@ impl CouplingBuilder {
             if terms[..t].iter().any(|&(other, _)| other == id) {
                 return Err(CouplingError::RepeatedJoint { coupling: coupling(), joint: j.name.clone() });
             }
-            if !j.kind.has_axis(FreeAxis::Angular) {
+            if self.kind.axis(t) == FreeAxis::Linear && !j.kind.has_axis(FreeAxis::Linear) {
+                return Err(CouplingError::NotLinear {
+                    coupling: coupling(),
+                    joint: j.name.clone(),
+                    kind: j.kind.name(),
+                });
+            }
+            if self.kind.axis(t) == FreeAxis::Angular && !j.kind.has_axis(FreeAxis::Angular) {
                 return Err(CouplingError::NotRotational {
                     coupling: coupling(),
                     joint: j.name.clone(),

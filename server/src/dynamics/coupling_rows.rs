@@ -5,14 +5,13 @@
 //! ```
 //!
 //! where `J_{s,t} = ((0, e₁ᵗ) on A_t, (0, −e₁ᵗ) on B_t)` is the angular free-coordinate Jacobian of
-//! shaft `t`'s joint at the current poses (`joint_rows.rs`). Blocks of a body shared by several
+//! shaft `t`'s joint at the current poses (`joint_rows.rs`; a rack's first term: the linear one). Blocks of a body shared by several
 //! shafts (a common housing) are summed into one, so the row touches each body once and at most
 //! four bodies (checked when the coupling is built).
 
 use super::coupling::Coupling;
 use super::joint::Joint;
 use super::joint_rows::{JointGeometry, Side};
-use super::motor::FreeAxis;
 use super::rows::{ConstraintRow, RowKey, RowKind};
 
 /// Appends the row of `coupling` to `out`; `side(joint)` gives the joint's two ends `(A, B)` at the
@@ -25,10 +24,10 @@ pub(crate) fn push_coupling_row(
     out: &mut Vec<ConstraintRow>,
 ) {
     let mut row = ConstraintRow::new(RowKey::Coupling(coupling.id), RowKind::Velocity);
-    for &(jid, k) in coupling.terms() {
+    for (t, &(jid, k)) in coupling.terms().iter().enumerate() {
         let joint = &joints[jid.index()];
         let (a, b) = side(joint);
-        let (_, ja, jb) = JointGeometry::new(joint, &a, &b).free_coordinate(FreeAxis::Angular);
+        let (_, ja, jb) = JointGeometry::new(joint, &a, &b).free_coordinate(coupling.kind.axis(t));
         let fits = row.add_block(a.index, ja.scale(k)) && row.add_block(b.index, jb.scale(k));
         debug_assert!(fits, "coupling '{}' touches more bodies than a row holds", coupling.name);
     }
@@ -51,6 +50,7 @@ mod tests {
     use crate::dynamics::coupling::{CouplingBuilder, CouplingId};
     use crate::dynamics::error::CouplingError;
     use crate::dynamics::joint::{DEFAULT_COMPLIANCE, JOINT_SLOTS, JointId, JointKind};
+    use crate::dynamics::motor::FreeAxis;
     use crate::dynamics::rows::MAX_ROW_BODIES;
 
     fn v3(rng: &mut ChaCha8Rng, s: f64) -> Vector3<f64> {

@@ -287,6 +287,16 @@ pub enum CouplingError {
         /// Its kind.
         kind: &'static str,
     },
+    /// A rack's joint has no free slide (only prismatic and cylindrical joints have one).
+    #[error("coupling '{coupling}': joint '{joint}' is a {kind} joint, which has no free slide to drive")]
+    NotLinear {
+        /// Coupling name.
+        coupling: String,
+        /// Joint name.
+        joint: String,
+        /// Its kind.
+        kind: &'static str,
+    },
     /// The shafts' joints touch more bodies than one row holds (4): give a differential's shafts
     /// a common housing.
     #[error(
@@ -356,6 +366,14 @@ pub enum ChainError {
         /// The id given.
         body: BodyId,
     },
+    /// The drum's hinge is not a joint of the world.
+    #[error("chain '{chain}': unknown drum joint {joint:?}")]
+    UnknownJoint {
+        /// Chain name.
+        chain: String,
+        /// The id given.
+        joint: JointId,
+    },
     /// Both ends are attached to the same body.
     #[error("chain '{chain}': both ends are attached to body '{body}'")]
     EndsOnOneBody {
@@ -370,6 +388,9 @@ pub enum ChainError {
     /// A joint was refused (not expected after the chain's own validation).
     #[error(transparent)]
     Joint(#[from] JointError),
+    /// The drum's coupling was refused (the hinge has no free rotation).
+    #[error(transparent)]
+    Coupling(#[from] CouplingError),
 }
 
 /// Errors of [`World::add_force`](super::World::add_force).

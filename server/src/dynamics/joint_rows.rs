@@ -182,6 +182,17 @@ fn row_def(joint: &Joint, row: JointRow) -> Option<(RowDef, f64)> {
     })
 }
 
+/// The locked linear rows of a joint kind as `(slot, k)`: the row along axis `e_k` of frame a
+/// (what [`row_def`] maps to `RowDef::Linear(k)`); the geometric stiffness reads their impulses.
+pub(crate) fn linear_row_axes(kind: JointKind) -> &'static [(usize, usize)] {
+    match kind {
+        JointKind::Prismatic | JointKind::Cylindrical => &[(0, 1), (1, 2)],
+        JointKind::Fixed | JointKind::Hinge | JointKind::Ball | JointKind::Universal => {
+            &[(0, 0), (1, 1), (2, 2)]
+        }
+    }
+}
+
 /// Appends the rows of `joint` at the poses of `a` and `b` (time step `h`) to `out`. The sides'
 /// velocities (the free velocities of the step) decide limit activation.
 pub(crate) fn push_joint_rows(joint: &Joint, a: &Side, b: &Side, h: f64, out: &mut Vec<ConstraintRow>) {

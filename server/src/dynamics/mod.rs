@@ -14,7 +14,9 @@
 //! `v⁺ = v + M⁻¹ (h f + Jᵀ λ)` and `x⁺ = x + h v⁺`, `q⁺ = normalize(exp(h ω⁺/2) ⊗ q)`. The rows are
 //! those of joints (locked axes, limits, velocity and position motors), couplings (gears,
 //! differentials, clutches: one row on up to four bodies) and spring–dampers (implicit force rows);
-//! buoyancy and drag enter `f` linearly implicitly (`force.rs`).
+//! buoyancy and drag enter `f` linearly implicitly (`force.rs`). Bodies whose joints carry loads
+//! large enough to make the step unstable get the joints' geometric stiffness in their effective
+//! mass, `M̃ = M + h² K̃` (`geometric_stiffness.rs`), in place of `M` above.
 //!
 //! | file | concept |
 //! |---|---|
@@ -30,6 +32,7 @@
 //! | `joint_rows.rs` | joint → rows: violations and Jacobians of each joint kind |
 //! | `coupling_rows.rs` | coupling → its velocity row on up to four bodies |
 //! | `island.rs` | union–find islands over dynamic bodies |
+//! | `geometric_stiffness.rs` | geometric stiffness of loaded joints: `M̃ = M + h² K̃` per body |
 //! | `assemble.rs` | per-island `A`, `b` from body blocks; `v⁺ = v_free + M⁻¹Jᵀλ` |
 //! | `step.rs` | the time step and its integrator |
 //! | `projection.rs` | optional position projection (post-stabilization) |
@@ -37,6 +40,7 @@
 //! | `world.rs` | the world: settings (and the projection default), adding and validating items, controls |
 //! | `query.rs` | read access: coordinates, impulses, reactions, islands, momentum |
 //! | `stats.rs` | per-island statistics of a step |
+//! | `watchdog.rs` | instability watchdog: energy gain beyond the inputs' work, speed bound |
 //! | `error.rs` | typed errors, one enum per operation |
 //!
 //! Conventions: SI units, z up, f64 throughout; a body's frame has its origin at the centre of mass;
@@ -74,6 +78,7 @@ mod coupling;
 mod coupling_rows;
 mod error;
 mod force;
+mod geometric_stiffness;
 mod island;
 mod joint;
 mod joint_rows;
@@ -83,13 +88,14 @@ mod query;
 mod rows;
 mod stats;
 mod step;
+mod watchdog;
 mod world;
 
 pub use body::{
     BodyBuilder, BodyId, BodyKind, RigidBody, box_inertia, capsule_inertia, cylinder_inertia, sphere_inertia,
 };
 pub use buoyancy::{Buoyancy, BuoyancyPoint, Water, Wave};
-pub use chain::{Chain, ChainBuilder, ChainEnd, ChainShape};
+pub use chain::{Chain, ChainBuilder, ChainEnd, ChainShape, steel_rope_mass_per_metre};
 pub use contact::{
     Bounds, Collider, ColliderBuilder, ColliderId, CollisionGroups, ContactError, ContactReport,
     ContactSettings, DEFAULT_CONTACT_COMPLIANCE, DEFAULT_MATERIAL, MAX_TERRAIN_TRIANGLES, Material, Shape,
@@ -101,6 +107,7 @@ pub use error::{
     StateError, StepError,
 };
 pub use force::{ForceElement, ForceId, SpringDamper};
+pub use geometric_stiffness::{GeometricStiffness, RHO_START};
 pub use island::Islands;
 pub use joint::{
     DEFAULT_COMPLIANCE, JOINT_SLOTS, Joint, JointBuilder, JointFrames, JointId, JointKind, JointRow,
@@ -109,4 +116,5 @@ pub use motor::{DEFAULT_POSITION_GAIN, FreeAxis, JointLimit, JointMotor, MotorMo
 pub use query::{JointFramesWorld, JointReaction};
 pub use rows::{ConstraintRow, Jac6, MAX_ROW_BODIES, RowKey, RowKind};
 pub use stats::IslandStats;
+pub use watchdog::{Instability, Watchdog, WatchdogSettings};
 pub use world::{World, WorldSettings};

@@ -145,6 +145,32 @@ impl World {
         &self.ws.stats
     }
 
+    /// Dynamic bodies whose effective inertia the geometric stiffness raised in the last step
+    /// (`geometric_stiffness.rs`).
+    pub fn geometric_stiffness_bodies(&self) -> usize {
+        self.ws.gs_bodies
+    }
+
+    /// Kinetic energy of the dynamic bodies (J).
+    pub fn kinetic_energy(&self) -> f64 {
+        self.bodies.iter().map(RigidBody::kinetic_energy).sum()
+    }
+
+    /// Gravitational potential energy of the dynamic bodies, `−Σ m g · x` (J; zero at the origin).
+    pub fn potential_energy(&self) -> f64 {
+        let g = self.settings.gravity;
+        self.bodies.iter().filter(|b| b.is_dynamic()).map(|b| -b.mass() * g.dot(&b.position())).sum()
+    }
+
+    /// Work done on the dynamic bodies since the world was built by its inputs (J): motors,
+    /// couplings, friction and spring rows, rows reaching kinematic or static bodies (a driven
+    /// winch, a moving platform, the ground), and applied forces other than gravity. Without the
+    /// passive joint rows' numerical work, `kinetic + potential` energy stays at its initial value
+    /// plus this; the watchdog (`watchdog.rs`) checks that it does not climb above.
+    pub fn input_work(&self) -> f64 {
+        self.ws.input_work
+    }
+
     /// Total linear momentum of the dynamic bodies.
     pub fn linear_momentum(&self) -> Vector3<f64> {
         self.bodies.iter().map(RigidBody::linear_momentum).sum()

@@ -7,14 +7,17 @@
 //!   2. v₀ = v/(1 + h d),  ω₀ = ω̃/(1 + h d_ω)          (ω̃: implicit gyroscopic update, below;
 //!                                                       d, d_ω: body damping rates, body.rs)
 //!      v_free = v₀ + h f / m,  ω_free = ω₀ + h I_w⁻¹ τ, or with implicit elements
-//!      (v_free, ω_free) = (v₀, ω₀) + (M − h D − h² K)⁻¹ (h f + h² K (v₀, ω₀))
+//!      (v_free, ω_free) = (v₀, ω₀) + (M − h D − h² K)⁻¹ (h f + h² K (v₀, ω₀));
+//!      for a body whose joints are loaded, I_w → Ĩ = I_w + α h² K̃ (the joints' geometric
+//!      stiffness from the previous step's impulses) and h τ → h τ − α h² K̃ ω₀ (the implicit
+//!      mode; geometric_stiffness.rs, eq. G2–G4): M̃ replaces M in steps 5–6
 //!   3. rows of every joint, coupling and spring at the current poses
 //!                                                      (joint_rows.rs, coupling_rows.rs, force.rs)
 //!      then of every contact point (contact/)
 //!   4. islands by union–find over rows joining dynamic bodies
-//!   5. per island: A = J M⁻¹ Jᵀ + C/h², b = r − J v_free (eq. 2); solve the boxed MLCP (eq. 3)
+//!   5. per island: A = J M̃⁻¹ Jᵀ + C/h², b = r − J v_free (eq. 2); solve the boxed MLCP (eq. 3)
 //!      warm-started from the previous step's index set and impulses of the same rows
-//!   6. v⁺ = v_free + M⁻¹ Jᵀ λ                          (eq. 1, first line)
+//!   6. v⁺ = v_free + M̃⁻¹ Jᵀ λ                          (eq. 1, first line)
 //!   7. x⁺ = x + h v⁺,   q⁺ = normalize(exp(h ω⁺/2) ⊗ q)  (ω world frame; = q ⊗ exp(h ω_body/2))
 //!   8. optional position projection (projection.rs), then commit
 //! ```
@@ -48,13 +51,14 @@
 use std::collections::HashMap;
 use std::time::Instant;
 
-use nalgebra::{Matrix6, UnitQuaternion, Vector3, Vector6};
+use nalgebra::{Matrix3, Matrix6, UnitQuaternion, Vector3, Vector6};
 
 use super::assemble::{Assembler, BodyMotion};
 use super::body::{BodyKind, RigidBody};
 use super::coupling_rows::push_coupling_row;
 use super::error::StepError;
 use super::force::{ForceAccumulator, ForceElement, ForceId};
+use super::geometric_stiffness::{self, GeometricStiffness};
 use super::island::Islands;
 use super::joint::JOINT_SLOTS;
 use super::joint_rows::{Side, push_joint_rows};
@@ -108,6 +112,14 @@ pub(crate) struct StepWorkspace {
     pub proj_motion: Vec<BodyMotion>,
     pub dv: Vec<Vector3<f64>>,
     pub dw: Vec<Vector3<f64>>,
+    /// Geometric stiffness `K̃` per body and its largest loaded lever arm squared (world-indexed;
+    /// `geometric_stiffness.rs`).
+    pub stiffness: Vec<(Matrix3<f64>, f64)>,
+    /// Bodies whose inertia the geometric stiffness raised in the last step.
+    pub gs_bodies: usize,
+    /// Work done on the dynamic bodies since the world was built by everything that is not
+    /// gravity or a passive joint row (J; see [`World::input_work`](super::World::input_work)).
+    pub input_work: f64,
 }
 
 /// `ω̃`: torque-free rotation over the step that conserves the angular momentum exactly (see the
@@ -135,6 +147,11 @@ fn gyroscopic(b: &RigidBody, h: f64) -> Vector3<f64> {
 
 /// Unconstrained velocity change `(Δv, Δω)` of body `i` with implicit force elements: solves
 /// `(M − h D − h² K) Δ = h f + h² K (v₀, ω₀)` (`force.rs`); explicit `h M⁻¹ f` if singular.
+///
+/// `gs` is the geometric-stiffness term `α h² K̃` of the body (zero when off) and `drag` its
+/// velocity term (`−α h² K̃ ω₀` in the implicit mode, eq. G3 of `geometric_stiffness.rs`; zero in
+/// the inertial mode, G4).
+#[allow(clippy::too_many_arguments)]
 fn implicit_change(
     b: &RigidBody,
     acc: &ForceAccumulator,
@@ -142,19 +159,21 @@ fn implicit_change(
     h: f64,
     v0: Vector3<f64>,
     w0: Vector3<f64>,
+    gs: &Matrix3<f64>,
+    drag: Vector3<f64>,
 ) -> (Vector3<f64>, Vector3<f64>) {
     let mut m = Matrix6::zeros();
     m.fixed_view_mut::<3, 3>(0, 0).fill_diagonal(b.mass());
-    m.fixed_view_mut::<3, 3>(3, 3).copy_from(&b.inertia_world());
+    m.fixed_view_mut::<3, 3>(3, 3).copy_from(&(b.inertia_world() + gs));
     let (d, k) = (&acc.damping[i], &acc.stiffness[i]);
     let lhs = m - d * h - k * (h * h);
     let vel = Vector6::new(v0.x, v0.y, v0.z, w0.x, w0.y, w0.z);
     let f = acc.force[i];
-    let t = acc.torque[i];
-    let rhs = Vector6::new(f.x, f.y, f.z, t.x, t.y, t.z) * h + k * vel * (h * h);
+    let t = acc.torque[i] * h + drag;
+    let rhs = Vector6::new(f.x * h, f.y * h, f.z * h, t.x, t.y, t.z) + k * vel * (h * h);
     match lhs.lu().solve(&rhs).filter(|x| x.iter().all(|c| c.is_finite())) {
         Some(x) => (x.fixed_rows::<3>(0).into_owned(), x.fixed_rows::<3>(3).into_owned()),
-        None => (f * (h * b.inv_mass()), b.inv_inertia_world() * t * h),
+        None => (f * (h * b.inv_mass()), b.inv_inertia_world() * t),
     }
 }
 
@@ -188,10 +207,18 @@ impl StepWorkspace {
         &mut self,
         settings: &WorldSettings,
         bodies: &[RigidBody],
+        joints: &[super::Joint],
         forces: &[super::ForceElement],
         time: f64,
+        step: u64,
     ) {
         let (h, n) = (settings.timestep, bodies.len());
+        if settings.geometric_stiffness == GeometricStiffness::Off {
+            self.stiffness.clear();
+        } else {
+            geometric_stiffness::accumulate(bodies, joints, &self.warm, step, h, &mut self.stiffness);
+        }
+        self.gs_bodies = 0;
         self.forces.reset(n);
         for (i, b) in bodies.iter().enumerate() {
             if b.is_dynamic() {
@@ -206,15 +233,31 @@ impl StepWorkspace {
         for (i, b) in bodies.iter().enumerate() {
             let m = match b.kind() {
                 BodyKind::Dynamic => {
-                    let inv_inertia = b.inv_inertia_world();
+                    let mut inv_inertia = b.inv_inertia_world();
                     let w0 = if settings.gyroscopic { gyroscopic(b, h) } else { b.angvel };
                     let (v0, w0) =
                         (b.linvel / (1.0 + h * b.linear_damping()), w0 / (1.0 + h * b.angular_damping()));
+                    // Geometric stiffness (geometric_stiffness.rs, G2–G3): Ĩ = I + α h² K̃.
+                    let mut gs = Matrix3::zeros();
+                    if let Some((k, r2)) = self.stiffness.get(i) {
+                        let alpha = geometric_stiffness::weight(k, *r2, b.mass(), &b.principal_inertia(), h);
+                        if alpha > 0.0
+                            && let Some(inv) = (b.inertia_world() + k * (alpha * h * h)).try_inverse()
+                        {
+                            gs = k * (alpha * h * h);
+                            inv_inertia = inv;
+                            self.gs_bodies += 1;
+                        }
+                    }
+                    let drag = match settings.geometric_stiffness {
+                        GeometricStiffness::Implicit => -(gs * w0),
+                        GeometricStiffness::Inertial | GeometricStiffness::Off => Vector3::zeros(),
+                    };
                     let (dv, dw) = match self.forces.implicit[i] {
-                        true => implicit_change(b, &self.forces, i, h, v0, w0),
+                        true => implicit_change(b, &self.forces, i, h, v0, w0, &gs, drag),
                         false => (
                             self.forces.force[i] * (h * b.inv_mass()),
-                            inv_inertia * self.forces.torque[i] * h,
+                            inv_inertia * (self.forces.torque[i] * h + drag),
                         ),
                     };
                     BodyMotion { dynamic: true, inv_mass: b.inv_mass(), inv_inertia, v: v0 + dv, w: w0 + dw }
@@ -292,6 +335,22 @@ impl StepWorkspace {
             projection_us: 0.0,
         };
         self.asm.apply_impulses(k, &self.islands, &self.rows, &mut self.v_new, &mut self.w_new);
+        // Work the island's input rows did on its dynamic bodies (the watchdog's energy budget):
+        // motors, couplings, friction and force rows (velocity and force rows), and every row that
+        // reaches a kinematic or static body. Passive position rows between dynamic bodies are not
+        // inputs: energy they add is what the watchdog looks for.
+        for (i, &ri) in self.islands.rows(k).iter().enumerate() {
+            let r = &self.rows[ri];
+            let input = r.kind != RowKind::Position || r.blocks().any(|(b, _)| !self.motion[b].dynamic);
+            if input {
+                let jv: f64 = r
+                    .blocks()
+                    .filter(|&(b, _)| self.motion[b].dynamic)
+                    .map(|(b, j)| j.dot(&self.v_new[b], &self.w_new[b]))
+                    .sum();
+                self.input_work += self.asm.lambda[i] * jv;
+            }
+        }
         self.stat_of_island[k] = solved;
         self.stats.push(st);
         let states = self.solvers[solved].index_set();
@@ -315,7 +374,7 @@ impl World {
     pub fn step(&mut self) -> Result<(), StepError> {
         let h = self.settings.timestep;
         let ws = &mut self.ws;
-        ws.prepare_bodies(&self.settings, &self.bodies, &self.forces, self.time);
+        ws.prepare_bodies(&self.settings, &self.bodies, &self.joints, &self.forces, self.time, self.steps);
 
         // 3–4. Rows and islands.
         ws.rows.clear();
@@ -372,6 +431,15 @@ impl World {
             ws.x_new.push(b.position + ws.v_new[i] * h);
             let q = UnitQuaternion::from_scaled_axis(ws.w_new[i] * h) * b.orientation;
             ws.q_new.push(UnitQuaternion::new_normalize(q.into_inner()));
+        }
+
+        // Work of applied forces other than gravity (buoyancy, drag, force elements) over the step.
+        for (i, b) in self.bodies.iter().enumerate().filter(|(_, b)| b.is_dynamic()) {
+            let f = ws.forces.force[i] - self.settings.gravity * b.mass();
+            let w = h * (f.dot(&ws.v_new[i]) + ws.forces.torque[i].dot(&ws.w_new[i]));
+            if w.is_finite() {
+                ws.input_work += w;
+            }
         }
 
         // 8. Position projection, finiteness check, commit.

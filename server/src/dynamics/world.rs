@@ -29,6 +29,7 @@ use super::error::{
     BodyError, ControlError, CouplingError, ForceError, JointError, SettingsError, StateError,
 };
 use super::force::{ForceElement, ForceId};
+use super::geometric_stiffness::GeometricStiffness;
 use super::joint::{Joint, JointBuilder, JointFrames, JointId, JointKind};
 use super::motor::{FreeAxis, JointMotor};
 use super::step::StepWorkspace;
@@ -53,6 +54,10 @@ pub struct WorldSettings {
     /// at every step end. 1 removes that error to ~1e-8 m but costs a second solve per step and
     /// dissipates energy at fast rotations (module doc).
     pub projection_iterations: usize,
+    /// Geometric stiffness of loaded joints (`geometric_stiffness.rs`): implicit by default (it
+    /// only acts on bodies whose joint loads make the step unstable); `Off` is the paper's step as
+    /// published.
+    pub geometric_stiffness: GeometricStiffness,
 }
 
 impl Default for WorldSettings {
@@ -64,6 +69,7 @@ impl Default for WorldSettings {
             gyroscopic: true,
             warm_start: true,
             projection_iterations: 0,
+            geometric_stiffness: GeometricStiffness::Implicit,
         }
     }
 }

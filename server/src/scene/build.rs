@@ -21,9 +21,10 @@ use super::controls::{
 use super::format::*;
 use super::{Location, Scene, SceneError};
 use crate::dynamics::{
-    BodyBuilder, BodyId, ColliderBuilder, CollisionGroups, CouplingBuilder, ForceElement, FreeAxis,
-    JointBuilder, JointFrames, JointKind, JointLimit, JointMotor, Material, ModelError, Shape, SpringDamper,
-    World, WorldSettings, box_inertia, capsule_inertia, cylinder_inertia, sphere_inertia,
+    BodyBuilder, BodyId, ChainBuilder, ChainEnd, ChainShape, ColliderBuilder, CollisionGroups,
+    CouplingBuilder, ForceElement, FreeAxis, GeometricStiffness, JointBuilder, JointFrames, JointKind,
+    JointLimit, JointMotor, Material, ModelError, Shape, SpringDamper, WatchdogSettings, World,
+    WorldSettings, box_inertia, capsule_inertia, cylinder_inertia, sphere_inertia,
 };
 
 /// Source text with a line index, for locating spans.
@@ -464,6 +465,71 @@ impl Builder<'_> {
     }
 }
 
+impl Builder<'_> {
+    /// A `[[cable]]`: checked here (located errors), built by [`World::add_chain`].
+    fn add_cable(&mut self, span: &Range<usize>, d: &CableDef) -> R<()> {
+        let start = self.vec3(span, "start", d.start)?;
+        let direction = self.unit3(span, "direction", d.direction)?;
+        let length = self.positive(span, "length", d.length)?;
+        let diameter = self.positive(span, "diameter", d.diameter)?;
+        if d.segments == 0 || d.segments > 10_000 {
+            return Err(self.invalid(
+                span,
+                "segments",
+                format!("{} segments (1 to 10000 allowed)", d.segments),
+            ));
+        }
+        let ell = length / d.segments as f64;
+        let mut cb = match d.mass {
+            // A given total mass (a rope with a fibre core, a chain) over capsules of the diameter.
+            Some(m) => {
+                let m = self.positive(span, "mass", m)?;
+                ChainBuilder::new(&d.name, start, direction, ell, m / d.segments as f64, d.segments)
+                    .shape(ChainShape::Capsule { radius: diameter / 2.0 })
+            }
+            None => ChainBuilder::new(&d.name, start, direction, ell, 1.0, d.segments).steel_rope(diameter),
+        };
+        let end = |name: Option<&str>, field: &str, absent: ChainEnd| -> R<ChainEnd> {
+            Ok(match name {
+                None => absent,
+                Some("world") => ChainEnd::World,
+                Some(n) => ChainEnd::Body(self.body(span, field, n)?),
+            })
+        };
+        cb = cb
+            .attach_start(end(d.a.as_deref(), "a", ChainEnd::World)?)
+            .attach_end(end(d.b.as_deref(), "b", ChainEnd::Free)?)
+            .compliance(self.non_negative(
+                span,
+                "compliance",
+                d.compliance.unwrap_or(self.default_compliance),
+            )?);
+        if let Some([l, a]) = d.damping {
+            cb = cb.damping(self.non_negative(span, "damping", l)?, self.non_negative(span, "damping", a)?);
+        }
+        match (&d.drum, d.drum_radius) {
+            (Some(n), Some(r)) => {
+                let hinge = self
+                    .world
+                    .joint_id(n)
+                    .ok_or_else(|| self.invalid(span, "drum", format!("no joint named `{n}`")))?;
+                if d.a.is_some() {
+                    return Err(self.invalid(
+                        span,
+                        "a",
+                        "a cable on a drum starts at the drum's fairlead: drop `a`",
+                    ));
+                }
+                cb = cb.drum(hinge, self.positive(span, "drum_radius", r)?);
+            }
+            (None, None) => {}
+            _ => return Err(self.invalid(span, "drum", "give both `drum` and `drum_radius`")),
+        }
+        self.world.add_chain(cb).map_err(|e| self.model(span, &d.name, e))?;
+        Ok(())
+    }
+}
+
 /// `{i}`, `{i-1}`, `{i+1}` in names of instance `i`.
 fn subst(s: &str, i: usize) -> String {
     if !s.contains('{') {
@@ -534,6 +600,22 @@ pub(crate) fn build(file: &str, text: &str) -> R<Scene> {
     }
     if let Some(w) = sec.warm_start {
         settings.warm_start = w;
+    }
+    if let Some(g) = &sec.geometric_stiffness {
+        settings.geometric_stiffness = GeometricStiffness::from_name(g).ok_or_else(|| {
+            probe.invalid(
+                &sspan,
+                "geometric_stiffness",
+                format!("unknown mode `{g}` (implicit, inertial, off)"),
+            )
+        })?;
+    }
+    let mut watchdog = WatchdogSettings::default();
+    if let Some(v) = sec.max_speed {
+        watchdog.max_speed = probe.positive(&sspan, "max_speed", v)?;
+    }
+    if let Some(e) = sec.energy_margin {
+        watchdog.energy_margin = probe.positive(&sspan, "energy_margin", e)?;
     }
     let duration = probe.positive(&sspan, "duration", sec.duration.unwrap_or(20.0))?;
     if sec.name.trim().is_empty() {
@@ -621,6 +703,9 @@ pub(crate) fn build(file: &str, text: &str) -> R<Scene> {
     for d in &parsed.spring {
         b.add_spring(&d.span(), d.get_ref(), zero)?;
     }
+    for d in &parsed.cable {
+        b.add_cable(&d.span(), d.get_ref())?;
+    }
     for c in &parsed.coupling {
         let (span, d) = (c.span(), c.get_ref());
         let joint = |n: &String| {
@@ -631,18 +716,20 @@ pub(crate) fn build(file: &str, text: &str) -> R<Scene> {
         let mut cb = match (d.kind.as_str(), js.as_slice()) {
             ("gear", &[x, y]) => CouplingBuilder::gear(&d.name, x, y, ratio),
             ("differential", &[i, l, r]) => CouplingBuilder::differential(&d.name, i, l, r, ratio),
-            ("gear" | "differential", _) => {
+            ("rack", &[r, p]) => CouplingBuilder::rack(&d.name, r, p, ratio),
+            ("gear" | "differential" | "rack", _) => {
                 return Err(b.invalid(
                     &span,
                     "joints",
-                    "a gear couples 2 joints [a, b]; a differential 3 [input, left, right]",
+                    "a gear couples 2 joints [a, b]; a differential 3 [input, left, right]; a rack 2 \
+                     [slide, pinion]",
                 ));
             }
             (other, _) => {
                 return Err(b.invalid(
                     &span,
                     "type",
-                    format!("unknown coupling type `{other}` (gear, differential)"),
+                    format!("unknown coupling type `{other}` (gear, differential, rack)"),
                 ));
             }
         };
@@ -677,6 +764,7 @@ pub(crate) fn build(file: &str, text: &str) -> R<Scene> {
         controls,
         script,
         joystick,
+        watchdog,
     })
 }
 

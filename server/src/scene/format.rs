@@ -25,6 +25,8 @@ pub(crate) struct SceneFile {
     #[serde(default)]
     pub repeat: Vec<Spanned<RepeatDef>>,
     #[serde(default)]
+    pub cable: Vec<Spanned<CableDef>>,
+    #[serde(default)]
     pub actuator: Vec<Spanned<ActuatorDef>>,
     #[serde(default)]
     pub joystick: Option<Spanned<JoystickDef>>,
@@ -51,6 +53,9 @@ pub(crate) struct SceneSection {
     pub projection_iterations: Option<usize>,
     pub warm_start: Option<bool>,
     pub gyroscopic: Option<bool>,
+    pub geometric_stiffness: Option<String>,
+    pub max_speed: Option<f64>,
+    pub energy_margin: Option<f64>,
 }
 
 /// `[[material]]`: friction of a pair of named materials.
@@ -198,6 +203,25 @@ pub(crate) struct SpringDef {
     pub stiffness: f64,
     #[serde(default)]
     pub damping: f64,
+}
+
+/// `[[cable]]`: a steel wire rope of capsule segments on ball joints (`dynamics/chain.rs`).
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct CableDef {
+    pub name: String,
+    pub start: [f64; 3],
+    pub direction: [f64; 3],
+    pub length: f64,
+    pub segments: usize,
+    pub diameter: f64,
+    pub mass: Option<f64>,
+    pub a: Option<String>,
+    pub b: Option<String>,
+    pub drum: Option<String>,
+    pub drum_radius: Option<f64>,
+    pub compliance: Option<f64>,
+    pub damping: Option<[f64; 2]>,
 }
 
 /// `[[repeat]]`: bodies, joints and springs written once, instantiated `count` times.

@@ -51,7 +51,7 @@ pub use controls::{
 };
 pub use overrides::{OverrideError, SceneOverride};
 
-use crate::dynamics::{ControlError, ModelError, StepError, World};
+use crate::dynamics::{ControlError, ModelError, StepError, WatchdogSettings, World};
 
 /// A place in a scene file (1-based line and column).
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -169,6 +169,8 @@ pub struct Scene {
     pub script: Script,
     /// Default joystick mapping.
     pub joystick: JoystickMap,
+    /// Bounds of the instability watchdog (`[scene] max_speed`, `energy_margin`).
+    pub watchdog: WatchdogSettings,
 }
 
 impl Scene {

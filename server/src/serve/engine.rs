@@ -24,7 +24,7 @@ use pivotsim_msgs as msgs;
 use tracing::{info, warn};
 
 use super::describe::{actuator_mode, describe};
-use crate::dynamics::BodyKind;
+use crate::dynamics::{BodyKind, Watchdog};
 use crate::scene::{self, ActuatorKind, Scene, SceneError};
 use crate::solver::Variant;
 
@@ -55,6 +55,8 @@ pub struct Engine {
     step_wall_us: f64,
     failure: Option<String>,
     generation: u64,
+    watchdog: Watchdog,
+    unstable: bool,
 }
 
 impl Engine {
@@ -65,6 +67,7 @@ impl Engine {
         deadman: Duration,
     ) -> Result<Engine, SceneError> {
         let scene = scene::load(scene_ref)?;
+        let watchdog = Watchdog::new(&scene.world, scene.watchdog);
         let mut e = Engine {
             scene_ref: scene_ref.to_string(),
             scene,
@@ -87,6 +90,8 @@ impl Engine {
             step_wall_us: 0.0,
             failure: None,
             generation: 0,
+            watchdog,
+            unstable: false,
         };
         e.scene_changed();
         e.encode_frames(0);
@@ -106,6 +111,8 @@ impl Engine {
         self.last_input = None;
         self.health.deadman_active = false;
         self.failure = None;
+        self.watchdog = Watchdog::new(&self.scene.world, self.scene.watchdog);
+        self.unstable = false;
     }
 
     /// Changes whenever the scene (and so its description) is replaced or reset.
@@ -409,6 +416,13 @@ impl Engine {
         match r {
             Ok(()) => {
                 self.sequence += 1;
+                let found = self.watchdog.check(&self.scene.world);
+                self.unstable = found.is_some();
+                if let Some(i) = found
+                    && self.watchdog.count().is_power_of_two()
+                {
+                    warn!("{}: unstable ({} steps flagged): {i}", self.scene.name, self.watchdog.count());
+                }
                 true
             }
             Err(e) => {
@@ -453,6 +467,8 @@ impl Engine {
         st.step_wall_us = self.step_wall_us;
         st.overruns = self.overruns;
         st.inputs = self.health;
+        st.unstable = self.unstable;
+        st.unstable_steps = self.watchdog.count().min(u64::from(u16::MAX)) as u16;
         st.islands.clear();
         for s in w.island_stats() {
             st.islands.push(msgs::IslandStats {
