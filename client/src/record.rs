@@ -144,8 +144,7 @@ pub fn run(common: &Common, args: &Args) -> Result<ExitCode> {
             &mut w,
             &world.key(Topic::Scene),
             "pivotsim.SceneDescription",
-            &serde_json::json!({"title": "pivotsim.SceneDescription", "type": "object",
-                "description": "the scene description frame of pivotsim-msgs (msgs/README.md)"}),
+            &tojson::scene_schema(),
         )?;
         let now = crate::net::now_ns();
         write(&mut w, id, 0, now, now, &serde_json::to_value(s)?)?;

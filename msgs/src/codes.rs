@@ -148,11 +148,13 @@ coded_enum! {
         Stale = 6 => "stale",
         /// Anything else (server policy).
         Other = 7 => "other",
+        /// An actuator command whose `mode` is not the scene actuator's mode.
+        WrongMode = 8 => "wrong-mode",
     }
 }
 
 /// Number of [`RejectReason`] counters in a stats frame.
-pub const REJECT_REASONS: usize = 8;
+pub const REJECT_REASONS: usize = 9;
 
 #[cfg(test)]
 mod tests {

@@ -3,7 +3,7 @@
 //! ```text
 //! offset size field
 //!      0    4 magic            b"PVSM"
-//!      4    2 version          u16 LE, FORMAT_VERSION (1)
+//!      4    2 version          u16 LE, FORMAT_VERSION (2)
 //!      6    2 kind             u16 LE, Kind code
 //!      8    4 payload_len      u32 LE, bytes after the header
 //!     12    4 flags            u32 LE, reserved: 0 in version 1
@@ -20,7 +20,7 @@ use crate::le;
 /// First four bytes of every frame.
 pub const MAGIC: [u8; 4] = *b"PVSM";
 /// Version written by this crate and the only one it decodes.
-pub const FORMAT_VERSION: u16 = 1;
+pub const FORMAT_VERSION: u16 = 2;
 /// Bytes of the header.
 pub const HEADER_LEN: usize = 16;
 /// Largest frame of any kind, header included (16 MiB).

@@ -41,7 +41,8 @@ pub use input::{
     InputError, JOYSTICK_LEN, Joystick, MAX_AXES, MAX_BOOM_TARGETS, MAX_BUTTONS, WINCH_LEN, WinchCommand,
 };
 pub use keys::{
-    DEFAULT_WORLD, KEY_PREFIX, KeyError, MAX_WORLD_NAME_LEN, Topic, WorldName, inputs_wildcard, parse_key,
+    DEFAULT_WORLD, IOX_INPUT_SERVICE, IOX_SUBSCRIBER_BUFFER, KEY_PREFIX, KeyError, MAX_WORLD_NAME_LEN,
+    SERVER_TOKEN, Topic, WorldName, inputs_wildcard, parse_key,
 };
 pub use message::{Message, MessageError};
 pub use name::{ActuatorName, MAX_ACTUATOR_NAME_LEN, NameError, is_name_byte, validate_actuator_name};

@@ -16,11 +16,11 @@
 //!             56     8  total_solve_us    f64, µs
 //!             64     8  max_residual_rel  f64
 //!             72     8  inputs_accepted   u64, since start
-//!             80    64  inputs_rejected   u64 × 8, since start, indexed by RejectReason code
-//!            144     4  deadman_trips     u32, since start
-//!            148     1  deadman_active    u8, 0 or 1: actuators are held at neutral now
-//!            149     3  reserved          0
-//!            152    40  island record × island_count
+//!             80    72  inputs_rejected   u64 × 9, since start, indexed by RejectReason code
+//!            152     4  deadman_trips     u32, since start
+//!            156     1  deadman_active    u8, 0 or 1: actuators are held at neutral now
+//!            157     3  reserved          0
+//!            160    40  island record × island_count
 //!
 //! island record   size  field
 //!              0     1  variant           u8, SolverVariant code
@@ -44,7 +44,7 @@ use crate::header::{self, DecodeError, FrameError, HEADER_LEN, Kind};
 use crate::le;
 
 /// Bytes of the fixed part of the payload.
-pub const STATS_FIXED_LEN: usize = 152;
+pub const STATS_FIXED_LEN: usize = 160;
 /// Bytes of one island record.
 pub const ISLAND_RECORD_LEN: usize = 40;
 /// Most islands in one frame.
@@ -290,7 +290,7 @@ impl IslandStats {
 }
 
 impl SolverStats {
-    /// Frame length in bytes: `16 + 152 + 40 · islands`.
+    /// Frame length in bytes: `16 + 160 + 40 · islands`.
     pub fn encoded_len(&self) -> usize {
         HEADER_LEN + STATS_FIXED_LEN + ISLAND_RECORD_LEN * self.islands.len()
     }
@@ -367,8 +367,8 @@ impl SolverStats {
         if p.len() != expected {
             return Err(FrameError::PayloadLength { kind, expected, found: p.len() }.into());
         }
-        header::check_reserved(p, 149..152, HEADER_LEN)?;
-        let deadman = p[148];
+        header::check_reserved(p, 157..160, HEADER_LEN)?;
+        let deadman = p[156];
         if deadman > 1 {
             return Err(DecodeError::Invalid(StatsError::DeadmanFlag { value: deadman }));
         }
@@ -388,7 +388,7 @@ impl SolverStats {
         self.inputs = InputHealth {
             accepted: le::u64_at(p, 72),
             rejected: std::array::from_fn(|i| le::u64_at(p, 80 + 8 * i)),
-            deadman_trips: le::u32_at(p, 144),
+            deadman_trips: le::u32_at(p, 152),
             deadman_active: deadman == 1,
         };
         self.validate_fixed().map_err(DecodeError::Invalid)?;
@@ -472,7 +472,7 @@ mod tests {
         b[rec + 3] = 1;
         assert_eq!(SolverStats::decode(&b), Err(FrameError::ReservedNonZero { offset: rec + 3 }.into()));
         let mut b = buf.clone();
-        b[HEADER_LEN + 148] = 2;
+        b[HEADER_LEN + 156] = 2;
         assert!(matches!(
             SolverStats::decode(&b),
             Err(DecodeError::Invalid(StatsError::DeadmanFlag { value: 2 }))

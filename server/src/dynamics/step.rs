@@ -273,6 +273,7 @@ impl StepWorkspace {
             nnz: s.nnz,
             variant: s.variant,
             status: s.status,
+            fallback: s.fallback,
             pivot_steps: s.pivot_steps,
             iterations: s.iterations,
             tight: s.tight,
