@@ -35,8 +35,8 @@ enum Command {
         /// A built-in scene name (see `scenes`) or a scene file path.
         #[arg(long)]
         scene: String,
-        /// Simulated seconds, a finite number > 0 (default: the scene's duration).
-        #[arg(long, value_parser = values::positive_finite)]
+        /// Simulated seconds, a finite number > 0 up to 1e6 (default: the scene's duration).
+        #[arg(long, value_parser = values::run_seconds)]
         duration: Option<f64>,
         /// Solver variant for every island (default: the scene's).
         #[arg(long)]

@@ -7,6 +7,15 @@ pub fn positive_finite(s: &str) -> Result<f64, String> {
     if v.is_finite() && v > 0.0 { Ok(v) } else { Err(format!("{v} is not a finite number > 0")) }
 }
 
+/// Longest simulated duration of `run` (s): about 11.6 days, 60 million steps at 60 Hz.
+pub const MAX_RUN_SECONDS: f64 = 1.0e6;
+
+/// Simulated seconds of `run`: a finite number `> 0` up to [`MAX_RUN_SECONDS`].
+pub fn run_seconds(s: &str) -> Result<f64, String> {
+    let v = positive_finite(s)?;
+    if v <= MAX_RUN_SECONDS { Ok(v) } else { Err(format!("{v} s is more than {MAX_RUN_SECONDS} s")) }
+}
+
 /// Seconds between status lines: `0` turns them off; otherwise a finite number of seconds `> 0`
 /// that a [`std::time::Duration`] can hold.
 pub fn status_interval(s: &str) -> Result<f64, String> {
@@ -31,6 +40,8 @@ mod tests {
             assert!(positive_finite(bad).is_err(), "{bad}");
         }
         assert_eq!(positive_finite("1e-300"), Ok(1e-300));
+        assert!(run_seconds("1e300").is_err());
+        assert_eq!(run_seconds("20"), Ok(20.0));
         for bad in ["nan", "inf", "-1", "-0.5", "1e300", "x"] {
             assert!(status_interval(bad).is_err(), "{bad}");
         }

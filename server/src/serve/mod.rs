@@ -419,7 +419,10 @@ fn serve_loop(
             }
             (last_status, status_steps, status_sim, status_solve_us) = (Instant::now(), 0, sim, 0.0);
         }
-        // Pacing.
+        // Pacing (none after the last step of a bounded run).
+        if config.max_steps.is_some_and(|m| steps >= m) {
+            break;
+        }
         let Some(rtf) = config.realtime_factor else { continue };
         // A scene loaded later may have another h: its period is held to the same bound.
         let period = step_period(engine.scene().world.settings().timestep, rtf).unwrap_or(MAX_STEP_PERIOD);
