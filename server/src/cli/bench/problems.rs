@@ -11,36 +11,24 @@ use serde::Serialize;
 use super::plan::{LONG_STEPS, Plan, SHORT_STEPS};
 use super::timing::median;
 
-/// One solver configuration on one problem.
+/// One solver configuration on one problem: the timings of the repeats, and the statistics of
+/// the last solve as the solver reports them (`SolveStats`, flattened into the same JSON object).
 #[derive(Debug, Clone, Serialize)]
 pub struct RunRecord {
     pub max_steps: usize,
-    pub status: SolveStatus,
-    pub pivot_steps: usize,
-    pub iterations: usize,
-    pub tight: usize,
-    pub residual: f64,
-    pub residual_rel: f64,
     /// Median `total_us` over the timed repeats.
     pub time_us: f64,
     /// Every timed repeat (the warm-up solve excluded when there is more than one run).
     pub time_us_samples: Vec<f64>,
     /// `time_us` per pivot step (PGS: per sweep).
     pub us_per_step: Option<f64>,
-    pub ordering_us: f64,
-    pub factor_us: f64,
-    pub downdate_us: f64,
-    pub solve_us: f64,
-    pub deletions: usize,
-    pub auto_choices: [usize; 3],
-    pub regularized: usize,
-    pub fallback: bool,
-    pub murty_steps: usize,
-    pub friction_updates: usize,
     /// Whether the repeats disagreed on the step count (should never happen).
     pub nondeterministic: bool,
     /// Copied from the 35-step run (which had converged) instead of run again.
     pub from_short: bool,
+    /// The last solve's statistics.
+    #[serde(flatten)]
+    pub stats: SolveStats,
 }
 
 impl RunRecord {
@@ -50,36 +38,21 @@ impl RunRecord {
         let steps = if st.variant == Variant::Pgs { st.iterations } else { st.pivot_steps };
         RunRecord {
             max_steps,
-            status: st.status,
-            pivot_steps: st.pivot_steps,
-            iterations: st.iterations,
-            tight: st.tight,
-            residual: st.residual,
-            residual_rel: st.residual_rel,
             time_us,
             time_us_samples: samples,
             us_per_step: (steps > 0).then(|| time_us / steps as f64),
-            ordering_us: st.ordering_us,
-            factor_us: st.factor_us,
-            downdate_us: st.downdate_us,
-            solve_us: st.solve_us,
-            deletions: st.deletions,
-            auto_choices: st.auto_choices,
-            regularized: st.regularized,
-            fallback: st.fallback,
-            murty_steps: st.murty_steps,
-            friction_updates: st.friction_updates,
             nondeterministic,
             from_short: false,
+            stats: st.clone(),
         }
     }
 
     pub fn converged(&self) -> bool {
-        self.status == SolveStatus::Converged
+        self.stats.status == SolveStatus::Converged
     }
 
     pub fn steps(&self) -> usize {
-        self.pivot_steps.max(self.iterations)
+        self.stats.pivot_steps.max(self.stats.iterations)
     }
 }
 

@@ -382,7 +382,7 @@ pub fn markdown(r: &Report<'_>) -> String {
             let s = &r.short;
             let long = match (&r.long, &r.long_skipped) {
                 (Some(l), _) if l.converged() => format!("yes ({})", l.steps()),
-                (Some(l), _) => format!("no ({}, r={:.1e})", l.status.name(), l.residual_rel),
+                (Some(l), _) => format!("no ({}, r={:.1e})", l.stats.status.name(), l.stats.residual_rel),
                 (None, Some(why)) => format!("skipped ({why})"),
                 (None, None) => "—".into(),
             };
@@ -398,7 +398,7 @@ pub fn markdown(r: &Report<'_>) -> String {
                 _ => "—".into(),
             };
             let choices = if r.variant == Variant::Auto {
-                format!("{}/{}/{}", s.auto_choices[0], s.auto_choices[1], s.auto_choices[2])
+                format!("{}/{}/{}", s.stats.auto_choices[0], s.stats.auto_choices[1], s.stats.auto_choices[2])
             } else {
                 String::new()
             };
@@ -406,12 +406,12 @@ pub fn markdown(r: &Report<'_>) -> String {
                 w,
                 "| {} | {} | {} | {} | {:.3} | {} | {:.1e} | {} | {} | {} |",
                 r.variant,
-                s.status.name(),
+                s.stats.status.name(),
                 s.steps(),
-                s.tight,
+                s.stats.tight,
                 s.time_us * 1e-3,
                 opt(s.us_per_step, 1),
-                s.residual_rel,
+                s.stats.residual_rel,
                 long,
                 del,
                 choices
