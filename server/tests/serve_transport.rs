@@ -317,14 +317,22 @@ fn a_server_killed_with_sigkill_restarts_cleanly() {
     assert!(seq.is_some(), "the restarted server publishes on the same world");
 }
 
-/// The README's main command: no subcommand serves the default scene.
+/// The README's main command: no subcommand serves the default scene, and says on start where it
+/// listens, which scene and transports are up, and how to connect.
 #[test]
 fn the_default_command_serves_the_default_scene() {
+    let endpoint = pivotsim_tests::free_endpoint();
     let out = std::process::Command::new(env!("CARGO_BIN_EXE_pivotsim-server"))
-        .args(["--steps", "30", "--fast", "--no-iceoryx2", "--listen", &pivotsim_tests::free_endpoint()])
+        .args(["--steps", "30", "--fast", "--no-iceoryx2", "--listen", &endpoint])
         .output()
         .unwrap();
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let text = String::from_utf8_lossy(&out.stdout);
-    assert!(text.starts_with("30 steps"), "{text}");
+    let start = text.lines().next().unwrap_or_default();
+    assert!(start.contains("scene `forklift`") && start.contains("world `default`"), "{text}");
+    assert!(text.contains("Zenoh peer") && text.contains(&format!("listening on {endpoint}")), "{text}");
+    assert!(!text.contains("iceoryx2 (same host"), "iceoryx2 is off: {text}");
+    assert!(text.contains(&format!("pivotsim-client -- --connect {endpoint} watch")), "{text}");
+    assert!(text.contains("pivotsim-ros2-bridge"), "{text}");
+    assert!(text.lines().any(|l| l.starts_with("30 steps")), "{text}");
 }
