@@ -6,6 +6,17 @@ use std::sync::{Arc, Mutex};
 use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
+/// A free TCP port on 127.0.0.1 (bound, read, released).
+pub fn free_port() -> u16 {
+    let l = std::net::TcpListener::bind("127.0.0.1:0").expect("bind 127.0.0.1:0");
+    l.local_addr().expect("a local address").port()
+}
+
+/// `tcp/127.0.0.1:<free port>`.
+pub fn free_endpoint() -> String {
+    format!("tcp/127.0.0.1:{}", free_port())
+}
+
 /// What a run printed.
 #[derive(Debug, Clone)]
 pub struct Output {

@@ -1,6 +1,5 @@
 //! A real server in-process on loopback, and a Zenoh client session connected to it.
 
-use std::net::TcpListener;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::thread::JoinHandle;
@@ -10,19 +9,10 @@ use pivotsim_msgs as msgs;
 use pivotsim_server::serve::{ServeConfig, ServeError, ServeReport, ZenohOptions, run};
 use zenoh::Wait;
 
+use crate::free_endpoint;
+
 /// How long a server may take to listen.
 const START_LIMIT: Duration = Duration::from_secs(20);
-
-/// A free TCP port on 127.0.0.1 (bound, read, released).
-pub fn free_port() -> u16 {
-    let l = TcpListener::bind("127.0.0.1:0").expect("bind 127.0.0.1:0");
-    l.local_addr().expect("a local address").port()
-}
-
-/// `tcp/127.0.0.1:<free port>`.
-pub fn free_endpoint() -> String {
-    format!("tcp/127.0.0.1:{}", free_port())
-}
 
 /// A world name unique to this test process and `tag`.
 pub fn world_name(tag: &str) -> String {

@@ -3,6 +3,8 @@
 //! liveliness token) and over iceoryx2 (the world's pose service already has a live publisher on
 //! this host). Everything on loopback; a refused start returns at once.
 
+#![cfg(feature = "live")]
+
 use std::sync::Arc;
 use std::sync::atomic::AtomicBool;
 

@@ -3,6 +3,8 @@
 //! `step` on a running world is `busy`, a paused server re-sends its last frame (same sequence),
 //! and after `reset` the sequence keeps counting while the simulation time restarts.
 
+#![cfg(feature = "live")]
+
 use std::time::{Duration, Instant};
 
 use pivotsim_msgs as msgs;
