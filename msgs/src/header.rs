@@ -333,7 +333,7 @@ mod tests {
     fn frame(kind: u16, payload: &[u8]) -> Vec<u8> {
         let mut b = Vec::new();
         b.extend_from_slice(b"PVSM");
-        b.extend_from_slice(&1u16.to_le_bytes());
+        b.extend_from_slice(&FORMAT_VERSION.to_le_bytes());
         b.extend_from_slice(&kind.to_le_bytes());
         b.extend_from_slice(&(payload.len() as u32).to_le_bytes());
         b.extend_from_slice(&0u32.to_le_bytes());
@@ -359,8 +359,8 @@ mod tests {
         b[0] = b'X';
         assert!(matches!(peek(&b), Err(FrameError::BadMagic { .. })));
         let mut b = ok.clone();
-        b[4] = 2;
-        assert_eq!(peek(&b), Err(FrameError::UnsupportedVersion { found: 2 }));
+        b[4] = 3;
+        assert_eq!(peek(&b), Err(FrameError::UnsupportedVersion { found: 3 }));
         let mut b = ok.clone();
         b[6] = 0x77;
         assert_eq!(peek(&b), Err(FrameError::UnknownKind { found: 0x77 }));
