@@ -106,50 +106,247 @@ fn joy_thread(
     Ok(())
 }
 
-/// Runs the bridge until `shutdown` is set.
+/// The ROS side's publishers.
+struct Outputs {
+    tf: Out<TFMessage>,
+    tf_static: Out<TFMessage>,
+    poses: Out<PoseArray>,
+    markers: Out<MarkerArray>,
+    stats: Out<DiagnosticArray>,
+    clock: Out<Clock>,
+    /// Publish failures of all of them.
+    failed: Arc<AtomicU64>,
+}
+
+impl Outputs {
+    /// Declares every output topic on `node` with its QoS (`dds::qos`).
+    fn create(node: &mut ros2_client::Node) -> anyhow::Result<Outputs> {
+        let failed = Arc::new(AtomicU64::new(0));
+        macro_rules! out {
+            ($t:ty, $name:expr, $qos:expr) => {{
+                let qos = $qos;
+                let topic = dds::topic::<$t>(node, $name, &qos)?;
+                Out::<$t> {
+                    name: $name,
+                    publisher: node
+                        .create_publisher(&topic, Some(qos))
+                        .map_err(|e| anyhow!("{}: {e:?}", $name))?,
+                    failed: failed.clone(),
+                }
+            }};
+        }
+        Ok(Outputs {
+            tf: out!(TFMessage, topics::TF, dds::qos::stream()),
+            tf_static: out!(TFMessage, topics::TF_STATIC, dds::qos::latched()),
+            poses: out!(PoseArray, topics::POSES, dds::qos::stream()),
+            markers: out!(MarkerArray, topics::MARKERS, dds::qos::latched()),
+            stats: out!(DiagnosticArray, topics::STATS, dds::qos::diagnostics()),
+            clock: out!(Clock, topics::CLOCK, dds::qos::stream()),
+            failed,
+        })
+    }
+}
+
+/// Subscribes to the joystick topic and starts the joy thread that forwards it to the server.
+fn spawn_joy(
+    node: &mut ros2_client::Node,
+    config: &BridgeConfig,
+    link: &Arc<ZenohLink>,
+    translator: &Arc<Mutex<JoyTranslator>>,
+    shutdown: &Arc<AtomicBool>,
+) -> anyhow::Result<std::thread::JoinHandle<anyhow::Result<()>>> {
+    let joy_qos = dds::qos::joy();
+    let joy_topic = dds::topic::<Joy>(node, &config.joy_topic, &joy_qos)?;
+    let joy_sub =
+        node.create_subscription::<Joy>(&joy_topic, Some(joy_qos)).map_err(|e| anyhow!("/joy: {e:?}"))?;
+    let (link, translator, shutdown) = (link.clone(), translator.clone(), shutdown.clone());
+    Ok(std::thread::Builder::new().name("joy".into()).spawn(move || {
+        let r = joy_thread(joy_sub, link, translator, shutdown.clone());
+        if let Err(e) = &r {
+            warn!("joy thread stopped: {e:#}");
+        }
+        r
+    })?)
+}
+
+/// The main loop's state: the scene, the last frames, and when each timer is due.
+struct Bridge<'a> {
+    config: &'a BridgeConfig,
+    world: msgs::WorldName,
+    link: Arc<ZenohLink>,
+    out: Outputs,
+    translator: Arc<Mutex<JoyTranslator>>,
+    source_id: u32,
+    scene: Option<SceneInfo>,
+    static_sent: bool,
+    last_request: Option<Instant>,
+    want_scene: bool,
+    frame: msgs::PoseFrame,
+    last_sim: f64,
+    /// Sequence and simulation time of the last frame published for the current scene.
+    published: Option<(u64, u64)>,
+    solver: Option<msgs::SolverStats>,
+    last_frame: Option<Instant>,
+    next_stats: Instant,
+    next_markers: Instant,
+    next_log: Option<Instant>,
+    report: BridgeReport,
+}
+
+impl Bridge<'_> {
+    /// Asks for the scene on start, when the frames stop matching it, and while there is none.
+    fn request_scene_when_due(&mut self) {
+        let retry = if self.scene.is_some() { Duration::from_millis(500) } else { Duration::from_secs(1) };
+        if (self.want_scene || self.scene.is_none()) && self.last_request.is_none_or(|t| t.elapsed() >= retry)
+        {
+            self.link.request_scene();
+            self.last_request = Some(Instant::now());
+            self.want_scene = false;
+        }
+    }
+
+    /// A scene description reply: a new scene gets its markers at once and its static frames anew.
+    fn on_scene(&mut self, bytes: &[u8]) {
+        match msgs::SceneDescription::decode(bytes) {
+            Ok(d) if self.scene.as_ref().is_none_or(|s| s.description != d) => {
+                info!("scene `{}`: {} bodies", d.scene, d.bodies.len());
+                let s = SceneInfo::new(d);
+                self.out.markers.publish(convert::scene_markers(&s, true));
+                self.next_markers = Instant::now() + self.config.markers_period;
+                self.scene = Some(s);
+                self.static_sent = false;
+                self.published = None;
+            }
+            Ok(_) => {}
+            Err(e) => warn!("scene description: {e}"),
+        }
+    }
+
+    fn on_stats(&mut self, bytes: &[u8]) {
+        match msgs::SolverStats::decode(bytes) {
+            Ok(s) => self.solver = Some(s),
+            Err(e) => warn!("stats frame: {e}"),
+        }
+    }
+
+    /// A pose frame: `/tf`, `/tf_static` (once per scene), `/pivotsim/poses` and `/clock`.
+    fn on_poses(&mut self, bytes: &[u8]) {
+        if let Err(e) = self.frame.decode_into(bytes) {
+            warn!("pose frame: {e}");
+            return;
+        }
+        let (frame, config) = (&self.frame, self.config);
+        if frame.sim_time < self.last_sim {
+            self.want_scene = true; // reset or a new scene
+        }
+        self.last_sim = frame.sim_time;
+        let repeat = self.published == Some((frame.sequence, frame.sim_time.to_bits()));
+        match &self.scene {
+            // A paused server repeats its last frame (same sequence and time): with simulation
+            // stamps that would be the same transforms at the same time again, which tf2 reports
+            // as TF_REPEATED_DATA: skip it. Wall stamps are fresh, so those repeats go out (not on
+            // /clock).
+            Some(_) if repeat && config.stamp == crate::StampSource::Sim => {}
+            Some(s) if s.matches(frame) => {
+                let stamp = config.stamp.stamp(frame.sim_time, frame.wall_time_ns);
+                let (moving, fixed) = convert::transforms(s, frame, stamp, &config.world_frame);
+                if !self.static_sent && !fixed.transforms.is_empty() {
+                    self.static_sent = self.out.tf_static.publish(fixed);
+                }
+                if !moving.transforms.is_empty() && self.out.tf.publish(moving) {
+                    self.report.tf_published += 1;
+                }
+                self.out.poses.publish(convert::pose_array(frame, stamp, &config.world_frame));
+                if !repeat {
+                    self.out.clock.publish(Clock { clock: Time::from_secs_f64(frame.sim_time) });
+                }
+                self.published = Some((frame.sequence, frame.sim_time.to_bits()));
+            }
+            _ => self.want_scene = true,
+        }
+    }
+
+    fn health(&self) -> BridgeHealth {
+        BridgeHealth {
+            world: self.world.as_str().to_string(),
+            scene: self.scene.as_ref().map(|s| s.description.scene.clone()),
+            pose_frames: self.link.inbox.pose_frames.load(Ordering::Relaxed),
+            pose_frames_skipped: self.link.inbox.pose_frames_skipped.load(Ordering::Relaxed),
+            server_silent_s: self.last_frame.map(|t| t.elapsed().as_secs_f64()),
+            ros_publish_failed: self.out.failed.load(Ordering::Relaxed),
+            joy: self.translator.lock().map(|t| t.counters).unwrap_or_default(),
+            source_id: self.source_id,
+        }
+    }
+
+    /// The timers: markers again (late joiners), `/pivotsim/stats`, the log line.
+    fn on_timers(&mut self, now: Instant) {
+        if now >= self.next_markers {
+            if let Some(s) = &self.scene {
+                self.out.markers.publish(convert::scene_markers(s, false));
+            }
+            self.next_markers = now + self.config.markers_period;
+        }
+        if now >= self.next_stats {
+            let stamp = match (&self.solver, self.config.stamp) {
+                (Some(s), crate::StampSource::Sim) => Time::from_secs_f64(s.sim_time),
+                _ => self.config.stamp.stamp(self.last_sim.max(0.0), self.frame.wall_time_ns),
+            };
+            self.out.stats.publish(convert::diagnostics(self.solver.as_ref(), &self.health(), stamp));
+            self.next_stats = now + self.config.stats_period;
+        }
+        if let Some(t) = self.next_log.filter(|t| now >= *t) {
+            let h = self.health();
+            info!(
+                "pose frames {} ({} skipped), /tf {}, joy {} received / {} forwarded / {} rejected, {} ROS publish failures",
+                h.pose_frames,
+                h.pose_frames_skipped,
+                self.report.tf_published,
+                h.joy.received,
+                h.joy.forwarded,
+                h.joy.rejected_total(),
+                h.ros_publish_failed
+            );
+            self.next_log = self.config.log_interval.map(|iv| t.max(now) + iv);
+        }
+    }
+
+    /// One round: the scene request, the newest frames (waiting at most until the next timer or
+    /// 100 ms), then the timers.
+    fn round(&mut self) {
+        self.request_scene_when_due();
+        let wait = self
+            .next_stats
+            .min(self.next_markers)
+            .saturating_duration_since(Instant::now())
+            .min(Duration::from_millis(100));
+        let new = self.link.inbox.take(wait);
+        self.last_frame = new.last_frame.or(self.last_frame);
+        if let Some(bytes) = new.scene {
+            self.on_scene(&bytes);
+        }
+        if let Some(bytes) = new.stats {
+            self.on_stats(&bytes);
+        }
+        if let Some(bytes) = new.poses {
+            self.on_poses(&bytes);
+        }
+        self.on_timers(Instant::now());
+    }
+}
+
+/// Runs the bridge until `shutdown` is set: the Zenoh link, the DDS node, the output topics, the
+/// joy thread, then rounds of [`Bridge::round`].
 pub fn run(config: &BridgeConfig, shutdown: Arc<AtomicBool>) -> anyhow::Result<BridgeReport> {
     let world = msgs::WorldName::new(config.world.clone()).map_err(|e| anyhow!("world name: {e}"))?;
     let zc = zenoh_link::config(&config.connect, config.zenoh_config.as_deref())?;
     let link = Arc::new(ZenohLink::open(zc, world.clone())?);
     let context = dds::context(config.domain_id, &config.dds_interfaces)?;
     let mut node = dds::node(&context, &config.node_name)?;
-    let failed = Arc::new(AtomicU64::new(0));
-    macro_rules! out {
-        ($t:ty, $name:expr, $qos:expr) => {{
-            let qos = $qos;
-            let topic = dds::topic::<$t>(&mut node, $name, &qos)?;
-            Out::<$t> {
-                name: $name,
-                publisher: node
-                    .create_publisher(&topic, Some(qos))
-                    .map_err(|e| anyhow!("{}: {e:?}", $name))?,
-                failed: failed.clone(),
-            }
-        }};
-    }
-    let tf = out!(TFMessage, topics::TF, dds::qos::stream());
-    let tf_static = out!(TFMessage, topics::TF_STATIC, dds::qos::latched());
-    let poses = out!(PoseArray, topics::POSES, dds::qos::stream());
-    let markers = out!(MarkerArray, topics::MARKERS, dds::qos::latched());
-    let stats = out!(DiagnosticArray, topics::STATS, dds::qos::diagnostics());
-    let clock = out!(Clock, topics::CLOCK, dds::qos::stream());
-    let joy_qos = dds::qos::joy();
-    let joy_topic = dds::topic::<Joy>(&mut node, &config.joy_topic, &joy_qos)?;
-    let joy_sub =
-        node.create_subscription::<Joy>(&joy_topic, Some(joy_qos)).map_err(|e| anyhow!("/joy: {e:?}"))?;
-
+    let out = Outputs::create(&mut node)?;
     let source_id = config.source_id.unwrap_or_else(random_source_id);
     let translator = Arc::new(Mutex::new(JoyTranslator::new(source_id)));
-    let joy = {
-        let (link, translator, shutdown) = (link.clone(), translator.clone(), shutdown.clone());
-        std::thread::Builder::new().name("joy".into()).spawn(move || {
-            let r = joy_thread(joy_sub, link, translator, shutdown.clone());
-            if let Err(e) = &r {
-                warn!("joy thread stopped: {e:#}");
-            }
-            r
-        })?
-    };
+    let joy = spawn_joy(&mut node, config, &link, &translator, &shutdown)?;
     info!(
         "bridging world `{}` (Zenoh {:?}) to ROS 2 domain {} as node /{}, joystick source {source_id}",
         world.as_str(),
@@ -157,136 +354,36 @@ pub fn run(config: &BridgeConfig, shutdown: Arc<AtomicBool>) -> anyhow::Result<B
         config.domain_id,
         config.node_name
     );
-
-    let mut scene: Option<SceneInfo> = None;
-    let mut static_sent = false;
-    let mut last_request: Option<Instant> = None;
-    let mut want_scene = true;
-    let mut frame = msgs::PoseFrame::default();
-    let mut last_sim = f64::NEG_INFINITY;
-    // Sequence and simulation time of the last frame published for the current scene.
-    let mut published: Option<(u64, u64)> = None;
-    let mut solver: Option<msgs::SolverStats> = None;
-    let mut last_frame: Option<Instant> = None;
-    let mut next_stats = Instant::now();
-    let mut next_markers = Instant::now() + config.markers_period;
-    let mut next_log = config.log_interval.map(|iv| Instant::now() + iv);
-    let mut report = BridgeReport::default();
-
+    let mut b = Bridge {
+        config,
+        world,
+        link,
+        out,
+        translator,
+        source_id,
+        scene: None,
+        static_sent: false,
+        last_request: None,
+        want_scene: true,
+        frame: msgs::PoseFrame::default(),
+        last_sim: f64::NEG_INFINITY,
+        published: None,
+        solver: None,
+        last_frame: None,
+        next_stats: Instant::now(),
+        next_markers: Instant::now() + config.markers_period,
+        next_log: config.log_interval.map(|iv| Instant::now() + iv),
+        report: BridgeReport::default(),
+    };
     while !shutdown.load(Ordering::Relaxed) && !joy.is_finished() {
-        // Scene: ask on start, when the frames stop matching it, and while there is none.
-        let retry = if scene.is_some() { Duration::from_millis(500) } else { Duration::from_secs(1) };
-        if (want_scene || scene.is_none()) && last_request.is_none_or(|t| t.elapsed() >= retry) {
-            link.request_scene();
-            last_request = Some(Instant::now());
-            want_scene = false;
-        }
-        let now = Instant::now();
-        let wait =
-            next_stats.min(next_markers).saturating_duration_since(now).min(Duration::from_millis(100));
-        let new = link.inbox.take(wait);
-        last_frame = new.last_frame.or(last_frame);
-        if let Some(bytes) = new.scene {
-            match msgs::SceneDescription::decode(&bytes) {
-                Ok(d) if scene.as_ref().is_none_or(|s| s.description != d) => {
-                    info!("scene `{}`: {} bodies", d.scene, d.bodies.len());
-                    let s = SceneInfo::new(d);
-                    markers.publish(convert::scene_markers(&s, true));
-                    next_markers = Instant::now() + config.markers_period;
-                    scene = Some(s);
-                    static_sent = false;
-                    published = None;
-                }
-                Ok(_) => {}
-                Err(e) => warn!("scene description: {e}"),
-            }
-        }
-        if let Some(bytes) = new.stats {
-            match msgs::SolverStats::decode(&bytes) {
-                Ok(s) => solver = Some(s),
-                Err(e) => warn!("stats frame: {e}"),
-            }
-        }
-        if let Some(bytes) = new.poses {
-            match frame.decode_into(&bytes) {
-                Ok(()) => {
-                    if frame.sim_time < last_sim {
-                        want_scene = true; // reset or a new scene
-                    }
-                    last_sim = frame.sim_time;
-                    let repeat = published == Some((frame.sequence, frame.sim_time.to_bits()));
-                    match &scene {
-                        // A paused server repeats its last frame (same sequence and time): with
-                        // simulation stamps that would be the same transforms at the same time
-                        // again, which tf2 reports as TF_REPEATED_DATA: skip it. Wall stamps
-                        // are fresh, so those repeats go out (not on /clock).
-                        Some(_) if repeat && config.stamp == crate::StampSource::Sim => {}
-                        Some(s) if s.matches(&frame) => {
-                            let stamp = config.stamp.stamp(frame.sim_time, frame.wall_time_ns);
-                            let (moving, fixed) = convert::transforms(s, &frame, stamp, &config.world_frame);
-                            if !static_sent && !fixed.transforms.is_empty() {
-                                static_sent = tf_static.publish(fixed);
-                            }
-                            if !moving.transforms.is_empty() && tf.publish(moving) {
-                                report.tf_published += 1;
-                            }
-                            poses.publish(convert::pose_array(&frame, stamp, &config.world_frame));
-                            if !repeat {
-                                clock.publish(Clock { clock: Time::from_secs_f64(frame.sim_time) });
-                            }
-                            published = Some((frame.sequence, frame.sim_time.to_bits()));
-                        }
-                        _ => want_scene = true,
-                    }
-                }
-                Err(e) => warn!("pose frame: {e}"),
-            }
-        }
-        let now = Instant::now();
-        if now >= next_markers {
-            if let Some(s) = &scene {
-                markers.publish(convert::scene_markers(s, false));
-            }
-            next_markers = now + config.markers_period;
-        }
-        let health = || BridgeHealth {
-            world: world.as_str().to_string(),
-            scene: scene.as_ref().map(|s| s.description.scene.clone()),
-            pose_frames: link.inbox.pose_frames.load(Ordering::Relaxed),
-            pose_frames_skipped: link.inbox.pose_frames_skipped.load(Ordering::Relaxed),
-            server_silent_s: last_frame.map(|t| t.elapsed().as_secs_f64()),
-            ros_publish_failed: failed.load(Ordering::Relaxed),
-            joy: translator.lock().map(|t| t.counters).unwrap_or_default(),
-            source_id,
-        };
-        if now >= next_stats {
-            let stamp = match (&solver, config.stamp) {
-                (Some(s), crate::StampSource::Sim) => Time::from_secs_f64(s.sim_time),
-                _ => config.stamp.stamp(last_sim.max(0.0), frame.wall_time_ns),
-            };
-            stats.publish(convert::diagnostics(solver.as_ref(), &health(), stamp));
-            next_stats = now + config.stats_period;
-        }
-        if let Some(t) = next_log.filter(|t| now >= *t) {
-            let h = health();
-            info!(
-                "pose frames {} ({} skipped), /tf {}, joy {} received / {} forwarded / {} rejected, {} ROS publish failures",
-                h.pose_frames,
-                h.pose_frames_skipped,
-                report.tf_published,
-                h.joy.received,
-                h.joy.forwarded,
-                h.joy.rejected_total(),
-                h.ros_publish_failed
-            );
-            next_log = config.log_interval.map(|iv| t.max(now) + iv);
-        }
+        b.round();
     }
     shutdown.store(true, Ordering::Relaxed);
     let joy_result = joy.join().map_err(|_| anyhow!("joy thread panicked"))?;
-    report.pose_frames = link.inbox.pose_frames.load(Ordering::Relaxed);
-    report.joy = translator.lock().map(|t| t.counters).unwrap_or_default();
-    report.ros_publish_failed = failed.load(Ordering::Relaxed);
+    let mut report = b.report;
+    report.pose_frames = b.link.inbox.pose_frames.load(Ordering::Relaxed);
+    report.joy = b.translator.lock().map(|t| t.counters).unwrap_or_default();
+    report.ros_publish_failed = b.out.failed.load(Ordering::Relaxed);
     info!("bridge stopped: {report:?}");
     joy_result.map(|()| report)
 }

@@ -49,15 +49,31 @@ struct Cli {
     /// ROS node name.
     #[arg(long, default_value = "pivotsim_bridge")]
     node_name: String,
-    /// /pivotsim/stats rate (Hz).
-    #[arg(long, default_value_t = 10.0)]
+    /// /pivotsim/stats rate (Hz), 0.01 to 1000.
+    #[arg(long, default_value_t = 10.0, value_parser = stats_rate)]
     stats_rate: f64,
     /// Joystick source id of the forwarded frames (default: random).
     #[arg(long)]
     source_id: Option<u32>,
-    /// Log the counters every this many seconds (0: never).
-    #[arg(long, default_value_t = 10.0)]
+    /// Log the counters every this many seconds (0: never; else 0.001 to 86400).
+    #[arg(long, default_value_t = 10.0, value_parser = log_interval)]
     log_interval: f64,
+}
+
+/// `--stats-rate`: a finite rate from 0.01 to 1000 Hz (a hostile value is a clear error).
+fn stats_rate(s: &str) -> Result<f64, String> {
+    let v: f64 = s.parse().map_err(|e| format!("{e}"))?;
+    if (0.01..=1000.0).contains(&v) { Ok(v) } else { Err(format!("{v} Hz is not from 0.01 to 1000 Hz")) }
+}
+
+/// `--log-interval`: 0 (never) or a finite number of seconds up to a day.
+fn log_interval(s: &str) -> Result<f64, String> {
+    let v: f64 = s.parse().map_err(|e| format!("{e}"))?;
+    if v == 0.0 || (0.001..=86_400.0).contains(&v) {
+        Ok(v)
+    } else {
+        Err(format!("{v} s is neither 0 (never) nor from 0.001 to 86400 s"))
+    }
 }
 
 fn main() -> ExitCode {
@@ -82,11 +98,6 @@ fn main() -> ExitCode {
             },
         },
     };
-    let valid = cli.stats_rate.is_finite() && cli.stats_rate > 0.0 && cli.log_interval.is_finite();
-    if !valid || cli.log_interval < 0.0 {
-        eprintln!("error: --stats-rate must be > 0 and --log-interval ≥ 0");
-        return ExitCode::FAILURE;
-    }
     let config = pivotsim_ros2_bridge::BridgeConfig {
         world: cli.world,
         connect: cli.connect,

@@ -14,29 +14,14 @@ use zenoh::pubsub::{Publisher, Subscriber};
 use zenoh::qos::CongestionControl;
 
 /// A client configuration: peer mode, connect to `connect`, listen nowhere, no multicast
-/// scouting; or the given file with `connect` added.
+/// scouting; or the given file with `connect` added (`pivotsim_link::zenoh_config`).
 pub fn config(connect: &[String], file: Option<&Path>) -> anyhow::Result<zenoh::Config> {
-    let err = |e: zenoh::Error| anyhow!("zenoh config: {e}");
-    let mut c = match file {
-        Some(p) => zenoh::Config::from_file(p).map_err(err)?,
-        None => {
-            let mut c = zenoh::Config::default();
-            c.insert_json5("mode", "\"peer\"").map_err(err)?;
-            c.insert_json5("listen/endpoints", "[]").map_err(err)?;
-            c.insert_json5("scouting/multicast/enabled", "false").map_err(err)?;
-            c
-        }
+    let e = pivotsim_link::zenoh_config::ZenohEndpoints {
+        connect: connect.to_vec(),
+        config_file: file.map(Path::to_path_buf),
+        ..Default::default()
     };
-    if !connect.is_empty() {
-        let json = serde_json_list(connect);
-        c.insert_json5("connect/endpoints", &json).map_err(err)?;
-    }
-    Ok(c)
-}
-
-fn serde_json_list(v: &[String]) -> String {
-    let items: Vec<String> = v.iter().map(|s| format!("{s:?}")).collect();
-    format!("[{}]", items.join(","))
+    Ok(e.config()?)
 }
 
 /// The newest frames from the server.

@@ -13,19 +13,18 @@
 #![cfg(feature = "ros2")]
 
 use std::collections::{BTreeSet, HashMap};
-use std::net::{Ipv4Addr, TcpListener};
+use std::net::Ipv4Addr;
 use std::path::PathBuf;
 use std::process::{Child, Command, Stdio};
-use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex};
-use std::thread::JoinHandle;
 use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
 
 use pivotsim_msgs as msgs;
 use pivotsim_ros2_bridge::convert::{DIAG_BRIDGE, DIAG_INPUTS};
 use pivotsim_ros2_bridge::ros_msgs::*;
 use pivotsim_ros2_bridge::{dds, topics};
-use pivotsim_server::serve::{ServeConfig, ServeReport, ZenohOptions, run};
+use pivotsim_server::serve::{ServeConfig, ZenohOptions};
+use pivotsim_tests::Server;
 use ros2_client::qos::{Durability, History, WhenFull};
 use ros2_client::{Node, QosProfile, Subscription};
 use zenoh::Wait;
@@ -82,11 +81,6 @@ actuator = "spin"
 deadzone = 0.0
 "#;
 
-fn free_endpoint() -> String {
-    let l = TcpListener::bind("127.0.0.1:0").unwrap();
-    format!("tcp/127.0.0.1:{}", l.local_addr().unwrap().port())
-}
-
 fn tmp(name: &str) -> PathBuf {
     std::env::temp_dir().join(format!("pivotsim-ros2-{}-{name}", std::process::id()))
 }
@@ -97,44 +91,11 @@ fn domain(test: u16) -> u16 {
     20 + (std::process::id() % 45) as u16 * 4 + test
 }
 
-struct Server {
-    endpoint: String,
-    world: msgs::WorldName,
-    shutdown: Arc<AtomicBool>,
-    thread: Option<JoinHandle<ServeReport>>,
-}
-
-impl Server {
-    fn start(tag: &str) -> Server {
-        let scene = tmp(&format!("{tag}.toml"));
-        std::fs::write(&scene, RIG).unwrap();
-        let endpoint = free_endpoint();
-        let world = format!("r{}-{tag}", std::process::id());
-        let config = ServeConfig {
-            scene: scene.display().to_string(),
-            world: world.clone(),
-            zenoh: Some(ZenohOptions { listen: vec![endpoint.clone()], ..ZenohOptions::default() }),
-            iceoryx2: false,
-            ..ServeConfig::default()
-        };
-        let shutdown = Arc::new(AtomicBool::new(false));
-        let flag = shutdown.clone();
-        let thread = std::thread::spawn(move || run(&config, flag).expect("server runs"));
-        Server { endpoint, world: msgs::WorldName::new(world).unwrap(), shutdown, thread: Some(thread) }
-    }
-
-    fn key(&self, t: msgs::Topic) -> String {
-        self.world.key(t)
-    }
-}
-
-impl Drop for Server {
-    fn drop(&mut self) {
-        self.shutdown.store(true, Ordering::Relaxed);
-        if let Some(t) = self.thread.take() {
-            let _ = t.join();
-        }
-    }
+/// The harness server on the test rig, Zenoh only (the bridge reads Zenoh).
+fn start_server(tag: &str) -> Server {
+    let scene = tmp(&format!("{tag}.toml"));
+    std::fs::write(&scene, RIG).unwrap();
+    Server::start_with(&scene.display().to_string(), &format!("r-{tag}"), |c| c.iceoryx2 = false)
 }
 
 /// The bridge binary, killed on drop; its log goes to a file shown when a test fails.
@@ -306,7 +267,7 @@ fn percentile(v: &mut [f64], p: f64) -> f64 {
 
 #[test]
 fn tf_carries_every_body_frame_with_the_zenoh_poses() {
-    let server = Server::start("tf");
+    let server = start_server("tf");
     let watcher = Watcher::connect(&server);
     let d = domain(0);
     let bridge = Bridge::spawn(&server, d, "tf");
@@ -471,7 +432,7 @@ fn joy(axes: Vec<f32>) -> Joy {
 
 #[test]
 fn joy_moves_the_machine_and_its_absence_trips_the_deadman() {
-    let server = Server::start("joy");
+    let server = start_server("joy");
     let watcher = Watcher::connect(&server);
     let d = domain(1);
     let bridge = Bridge::spawn(&server, d, "joy");
@@ -521,7 +482,7 @@ fn joy_moves_the_machine_and_its_absence_trips_the_deadman() {
 
 #[test]
 fn malformed_joy_is_rejected_and_counted_by_the_bridge() {
-    let server = Server::start("bad");
+    let server = start_server("bad");
     let watcher = Watcher::connect(&server);
     let d = domain(2);
     let bridge = Bridge::spawn(&server, d, "bad");
@@ -592,7 +553,7 @@ fn malformed_joy_is_rejected_and_counted_by_the_bridge() {
 #[test]
 fn bridge_waits_for_a_late_server_and_never_slows_it() {
     // The bridge first: it connects to an endpoint nobody listens on yet.
-    let endpoint = free_endpoint();
+    let endpoint = pivotsim_tests::free_endpoint();
     let world = format!("r{}-late", std::process::id());
     let d = domain(3);
     let log = tmp("late.log");
@@ -634,14 +595,7 @@ fn bridge_waits_for_a_late_server_and_never_slows_it() {
         iceoryx2: false,
         ..ServeConfig::default()
     };
-    let shutdown = Arc::new(AtomicBool::new(false));
-    let flag = shutdown.clone();
-    let server = Server {
-        endpoint,
-        world: msgs::WorldName::new(world).unwrap(),
-        shutdown,
-        thread: Some(std::thread::spawn(move || run(&config, flag).expect("server runs"))),
-    };
+    let server = Server::spawn(config);
     let watcher = Watcher::connect(&server);
     let deadline = Instant::now() + Duration::from_secs(30);
     let mut tf = Vec::new();

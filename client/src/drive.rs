@@ -185,39 +185,237 @@ fn bar(v: f32) -> String {
     format!("[{l}|{r}]")
 }
 
-/// Runs `drive`.
-pub fn run(common: &Common, args: &Args) -> Result<ExitCode> {
-    let timeout = common.timeout_or(5.0);
-    let world = common.world()?;
-    let scripted = !args.axes.is_empty();
+/// Checks `--axes` before anything connects.
+fn check_axes(args: &Args) -> Result<()> {
     if args.axes.len() > msgs::MAX_AXES {
         bail!("{} axes (at most {})", args.axes.len(), msgs::MAX_AXES);
     }
     if args.axes.iter().any(|a| !(a.is_finite() && (-1.0..=1.0).contains(a))) {
         bail!("axis values must be in [-1, 1]");
     }
+    Ok(())
+}
+
+/// Where the frames go: Zenoh publishers (declared on first use), or the iceoryx2 `cmd` service
+/// once the server subscribes to it.
+fn open_sink(args: &Args, world: &msgs::WorldName, timeout: Duration) -> Result<InputSink> {
+    Ok(match args.transport {
+        TransportKind::Zenoh => InputSink::Zenoh { publishers: Vec::new() },
+        TransportKind::Iceoryx2 => {
+            let p = IoxInputs::open(world)?;
+            wait_iox_subscriber(&p, timeout)?;
+            InputSink::Iox(p)
+        }
+    })
+}
+
+/// The drive loop's state: what is pressed, where the frames go, what was sent.
+struct Driver<'a> {
+    args: &'a Args,
+    layout: Layout,
+    keys: KeyState,
+    pad: Option<pad::Pad>,
+    scripted: bool,
+    use_keys: bool,
+    axis_count: usize,
+    button_count: usize,
+    source: u32,
+    seq: u64,
+    sink: InputSink,
+    link: Option<crate::net::ZenohLink>,
+    timeout: Duration,
+    stats: Option<Stream>,
+    server: String,
+    buf: Vec<u8>,
+    sent: u64,
+    errors: u64,
+    nl: &'static str,
+}
+
+impl Driver<'_> {
+    /// The start lines: scene, world, transport, source, gamepad, key help.
+    fn banner(
+        &self,
+        scene: Option<&msgs::SceneDescription>,
+        world: &msgs::WorldName,
+        pad: Option<&str>,
+    ) -> Result<()> {
+        let nl = self.nl;
+        let mut out = std::io::stdout().lock();
+        let scene_name = scene.map_or("?", |s| s.scene.as_str());
+        write!(
+            out,
+            "driving scene `{scene_name}` (world `{world}`) via {:?}, source {:#010x}{nl}",
+            self.args.transport, self.source
+        )?;
+        if let Some(n) = pad {
+            write!(out, "gamepad: {n}{nl}")?;
+        }
+        if self.use_keys {
+            let mode = if self.keys.hold { "hold keys" } else { "lever keys: each press moves 0.25" };
+            write!(out, "keyboard ({mode}); Space centres, Esc or Ctrl-C quits{nl}")?;
+            for l in self.layout.help() {
+                write!(out, "  {l}{nl}")?;
+            }
+        }
+        out.flush()?;
+        Ok(())
+    }
+
+    /// Reads keys until `next` (or sleeps until it); `true` when the operator quits.
+    fn read_keys_until(&mut self, next: Instant) -> Result<bool> {
+        if !self.use_keys {
+            std::thread::sleep(next.saturating_duration_since(Instant::now()));
+            return Ok(false);
+        }
+        while crossterm::event::poll(next.saturating_duration_since(Instant::now()))? {
+            if let Event::Key(k) = crossterm::event::read()? {
+                let ctrl_c = k.code == KeyCode::Char('c') && k.modifiers.contains(KeyModifiers::CONTROL);
+                if k.code == KeyCode::Esc || ctrl_c {
+                    interrupt();
+                    return Ok(true);
+                }
+                let action =
+                    if k.kind == KeyEventKind::Release { KeyAction::Release } else { KeyAction::Press };
+                self.keys.key(&self.layout, k.code, action, k.kind == KeyEventKind::Repeat);
+            }
+            if Instant::now() >= next {
+                break;
+            }
+        }
+        Ok(false)
+    }
+
+    /// The state to send: constant (`--axes`), or keyboard + gamepad.
+    fn state(&mut self) -> ([f32; msgs::MAX_AXES], u64) {
+        let mut axes = [0.0f32; msgs::MAX_AXES];
+        let mut buttons;
+        if self.scripted {
+            axes[..self.args.axes.len()].copy_from_slice(&self.args.axes);
+            buttons = self.args.buttons;
+        } else {
+            axes = self.keys.axes;
+            buttons = self.keys.buttons;
+            if let Some((pa, pb)) = self.pad.as_mut().and_then(|p| p.read()) {
+                for (a, p) in axes.iter_mut().zip(pa) {
+                    *a = (*a + p).clamp(-1.0, 1.0);
+                }
+                buttons |= pb;
+            }
+        }
+        if self.button_count < 64 {
+            buttons &= (1u64 << self.button_count) - 1;
+        }
+        (axes, buttons)
+    }
+
+    /// Encodes and sends one joystick frame; an error ends the run only while nothing got through.
+    fn send(&mut self, axes: &[f32; msgs::MAX_AXES], buttons: u64) -> Result<()> {
+        self.seq += 1;
+        let j = msgs::Joystick::new(
+            self.seq,
+            self.source,
+            &axes[..self.axis_count],
+            buttons,
+            self.button_count as u8,
+        )
+        .ok_or_else(|| anyhow!("joystick state"))?;
+        msgs::InputCommand::Joystick(j).encode(&mut self.buf).map_err(|e| anyhow!("joystick: {e}"))?;
+        match self.sink.send(self.link.as_ref(), Topic::Joystick, &self.buf, self.timeout) {
+            Ok(()) => self.sent += 1,
+            Err(e) => {
+                self.errors += 1;
+                if self.errors == 1 {
+                    eprint!("pivotsim-client: {e:#}{}", self.nl);
+                }
+                if self.sent == 0 && self.errors >= 3 {
+                    return Err(e);
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// The server's input counters from the newest stats frames (best effort).
+    fn read_server_counters(&mut self) {
+        let Some(s) = &self.stats else { return };
+        while let Some(r) = s.inbox.try_recv() {
+            if let Ok(st) = msgs::SolverStats::decode(&r.bytes) {
+                self.server = format!(
+                    "server: accepted {} rejected {}{}",
+                    st.inputs.accepted,
+                    st.inputs.rejected_total(),
+                    if st.inputs.deadman_active { " DEADMAN" } else { "" }
+                );
+            }
+        }
+    }
+
+    /// The status line under the help (raw terminal only).
+    fn draw_status(&self, axes: &[f32; msgs::MAX_AXES], buttons: u64) -> Result<()> {
+        let shown: Vec<String> = self
+            .layout
+            .axes
+            .iter()
+            .map(|a| format!("{}{}{}", key_name(a.plus), bar(axes[a.axis as usize]), key_name(a.minus)))
+            .collect();
+        let mut out = std::io::stdout().lock();
+        write!(
+            out,
+            "\r{}  buttons {:#x}  sent {}  {}\x1b[K",
+            shown.join(" "),
+            buttons,
+            self.sent,
+            self.server
+        )?;
+        out.flush()?;
+        Ok(())
+    }
+
+    /// Sends at the period until the end, Esc or Ctrl-C.
+    fn drive(&mut self, period: Duration, end: Option<Instant>, raw: bool) -> Result<()> {
+        let mut next = Instant::now();
+        let mut last_status = Instant::now();
+        loop {
+            if interrupted() || end.is_some_and(|e| Instant::now() >= e) {
+                return Ok(());
+            }
+            if self.read_keys_until(next)? {
+                return Ok(());
+            }
+            next += period;
+            if next < Instant::now() {
+                next = Instant::now() + period;
+            }
+            let (axes, buttons) = self.state();
+            self.send(&axes, buttons)?;
+            self.read_server_counters();
+            if raw && last_status.elapsed() >= Duration::from_millis(100) {
+                last_status = Instant::now();
+                self.draw_status(&axes, buttons)?;
+            }
+        }
+    }
+}
+
+/// Runs `drive`: checks, the link and the scene, the sink, the terminal, the banner, then the loop.
+pub fn run(common: &Common, args: &Args) -> Result<ExitCode> {
+    let timeout = common.timeout_or(5.0);
+    let world = common.world()?;
+    let scripted = !args.axes.is_empty();
+    check_axes(args)?;
     let (link, scene) = crate::util::input_link(common, args.transport, timeout)?;
     let layout = Layout::from_scene(scene.as_ref());
-    let mut pad = if scripted || args.no_gamepad { None } else { pad::Pad::open() };
+    let pad = if scripted || args.no_gamepad { None } else { pad::Pad::open() };
     let pad_name = pad.as_ref().and_then(|p| p.name());
     let tty = std::io::stdin().is_terminal() && std::io::stdout().is_terminal();
     if !scripted && !tty && pad_name.is_none() {
         bail!("drive needs a terminal (keyboard), a gamepad, or --axes");
     }
-    let mut sink = match args.transport {
-        TransportKind::Zenoh => InputSink::Zenoh { publishers: Vec::new() },
-        TransportKind::Iceoryx2 => {
-            let p = IoxInputs::open(&world)?;
-            wait_iox_subscriber(&p, timeout)?;
-            InputSink::Iox(p)
-        }
-    };
+    let sink = open_sink(args, &world, timeout)?;
     // Stats for the status line (best effort).
     let stats =
         Stream::open(common, args.transport, &[Topic::Stats], 64, Duration::from_millis(2), None).ok();
-    let source = args.source_id.unwrap_or_else(crate::util::random_u32);
-    let period = secs(1.0 / args.rate.clamp(1.0, 200.0));
-    let end = args.duration.map(|d| Instant::now() + secs(d));
     let use_keys = !scripted && tty;
     let mut keys = KeyState::new(&layout, false);
     let raw = if use_keys {
@@ -227,27 +425,6 @@ pub fn run(common: &Common, args: &Args) -> Result<ExitCode> {
     } else {
         None
     };
-    let nl = if raw.is_some() { "\r\n" } else { "\n" };
-    {
-        let mut out = std::io::stdout().lock();
-        let scene_name = scene.as_ref().map_or("?", |s| s.scene.as_str());
-        write!(
-            out,
-            "driving scene `{scene_name}` (world `{world}`) via {:?}, source {source:#010x}{nl}",
-            args.transport
-        )?;
-        if let Some(n) = &pad_name {
-            write!(out, "gamepad: {n}{nl}")?;
-        }
-        if use_keys {
-            let mode = if keys.hold { "hold keys" } else { "lever keys: each press moves 0.25" };
-            write!(out, "keyboard ({mode}); Space centres, Esc or Ctrl-C quits{nl}")?;
-            for l in layout.help() {
-                write!(out, "  {l}{nl}")?;
-            }
-        }
-        out.flush()?;
-    }
     let axis_count = if scripted {
         args.axes.len()
     } else {
@@ -258,112 +435,38 @@ pub fn run(common: &Common, args: &Args) -> Result<ExitCode> {
     } else {
         layout.button_count().max(if pad_name.is_some() { 17 } else { 0 })
     };
-    let mut seq = now_ns();
-    let mut sent = 0u64;
-    let mut errors = 0u64;
-    let mut next = Instant::now();
-    let mut last_status = Instant::now();
-    let mut server = String::new();
-    let mut buf = Vec::new();
-    let result: Result<()> = (|| {
-        loop {
-            if interrupted() || end.is_some_and(|e| Instant::now() >= e) {
-                return Ok(());
-            }
-            // Keys until the next frame is due.
-            if use_keys {
-                while crossterm::event::poll(next.saturating_duration_since(Instant::now()))? {
-                    if let Event::Key(k) = crossterm::event::read()? {
-                        let ctrl_c =
-                            k.code == KeyCode::Char('c') && k.modifiers.contains(KeyModifiers::CONTROL);
-                        if k.code == KeyCode::Esc || ctrl_c {
-                            interrupt();
-                            return Ok(());
-                        }
-                        let action = if k.kind == KeyEventKind::Release {
-                            KeyAction::Release
-                        } else {
-                            KeyAction::Press
-                        };
-                        keys.key(&layout, k.code, action, k.kind == KeyEventKind::Repeat);
-                    }
-                    if Instant::now() >= next {
-                        break;
-                    }
-                }
-            } else {
-                std::thread::sleep(next.saturating_duration_since(Instant::now()));
-            }
-            next += period;
-            if next < Instant::now() {
-                next = Instant::now() + period;
-            }
-            // The state: constant, or keyboard + gamepad.
-            let mut axes = [0.0f32; msgs::MAX_AXES];
-            let mut buttons;
-            if scripted {
-                axes[..args.axes.len()].copy_from_slice(&args.axes);
-                buttons = args.buttons;
-            } else {
-                axes = keys.axes;
-                buttons = keys.buttons;
-                if let Some((pa, pb)) = pad.as_mut().and_then(|p| p.read()) {
-                    for (a, p) in axes.iter_mut().zip(pa) {
-                        *a = (*a + p).clamp(-1.0, 1.0);
-                    }
-                    buttons |= pb;
-                }
-            }
-            if button_count < 64 {
-                buttons &= (1u64 << button_count) - 1;
-            }
-            seq += 1;
-            let j = msgs::Joystick::new(seq, source, &axes[..axis_count], buttons, button_count as u8)
-                .ok_or_else(|| anyhow!("joystick state"))?;
-            msgs::InputCommand::Joystick(j).encode(&mut buf).map_err(|e| anyhow!("joystick: {e}"))?;
-            match sink.send(link.as_ref(), Topic::Joystick, &buf, timeout) {
-                Ok(()) => sent += 1,
-                Err(e) => {
-                    errors += 1;
-                    if errors == 1 {
-                        eprint!("pivotsim-client: {e:#}{nl}");
-                    }
-                    if sent == 0 && errors >= 3 {
-                        return Err(e);
-                    }
-                }
-            }
-            if let Some(s) = &stats {
-                while let Some(r) = s.inbox.try_recv() {
-                    if let Ok(st) = msgs::SolverStats::decode(&r.bytes) {
-                        server = format!(
-                            "server: accepted {} rejected {}{}",
-                            st.inputs.accepted,
-                            st.inputs.rejected_total(),
-                            if st.inputs.deadman_active { " DEADMAN" } else { "" }
-                        );
-                    }
-                }
-            }
-            if raw.is_some() && last_status.elapsed() >= Duration::from_millis(100) {
-                last_status = Instant::now();
-                let shown: Vec<String> = layout
-                    .axes
-                    .iter()
-                    .map(|a| {
-                        format!("{}{}{}", key_name(a.plus), bar(axes[a.axis as usize]), key_name(a.minus))
-                    })
-                    .collect();
-                let mut out = std::io::stdout().lock();
-                write!(out, "\r{}  buttons {:#x}  sent {sent}  {server}\x1b[K", shown.join(" "), buttons)?;
-                out.flush()?;
-            }
-        }
-    })();
+    let mut d = Driver {
+        args,
+        layout,
+        keys,
+        pad,
+        scripted,
+        use_keys,
+        axis_count,
+        button_count,
+        source: args.source_id.unwrap_or_else(crate::util::random_u32),
+        seq: now_ns(),
+        sink,
+        link,
+        timeout,
+        stats,
+        server: String::new(),
+        buf: Vec::new(),
+        sent: 0,
+        errors: 0,
+        nl: if raw.is_some() { "\r\n" } else { "\n" },
+    };
+    d.banner(scene.as_ref(), &world, pad_name.as_deref())?;
+    let period = secs(1.0 / args.rate.clamp(1.0, 200.0));
+    let end = args.duration.map(|t| Instant::now() + secs(t));
+    let result = d.drive(period, end, raw.is_some());
     drop(raw);
     println!(
-        "{}sent {sent} joystick frames as source {source:#010x} ({errors} send errors)",
-        if use_keys { "\n" } else { "" }
+        "{}sent {} joystick frames as source {:#010x} ({} send errors)",
+        if use_keys { "\n" } else { "" },
+        d.sent,
+        d.source,
+        d.errors
     );
     result?;
     Ok(ExitCode::SUCCESS)

@@ -8,8 +8,8 @@
 //! frame and counts it ([`Inbox::dropped`]); nothing blocks a transport thread.
 
 use std::sync::Arc;
-use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
-use std::sync::mpsc::{Receiver, SyncSender, TrySendError, sync_channel};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::mpsc::sync_channel;
 use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
@@ -20,10 +20,7 @@ use pivotsim_msgs as msgs;
 use pivotsim_msgs::{Topic, WorldName};
 use zenoh::Wait;
 
-/// Nanoseconds since the UNIX epoch.
-pub fn now_ns() -> u64 {
-    std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).map_or(0, |d| d.as_nanos() as u64)
-}
+pub use pivotsim_link::wall_ns as now_ns;
 
 /// Which transport carries frames.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
@@ -54,72 +51,24 @@ pub struct Received {
     pub bytes: Vec<u8>,
 }
 
-/// Frames delivered by the transports, with a drop counter.
-#[derive(Debug)]
-pub struct Inbox {
-    rx: Receiver<Received>,
-    dropped: Arc<AtomicU64>,
-}
-
+/// Frames delivered by the transports, with a drop counter (`pivotsim_link::inbox`).
+pub type Inbox = pivotsim_link::Inbox<Received>;
 /// The sending side of an [`Inbox`], cloned into callbacks and threads.
-#[derive(Debug, Clone)]
-pub struct InboxSender {
-    tx: SyncSender<Received>,
-    dropped: Arc<AtomicU64>,
-}
-
-impl InboxSender {
-    /// Offers a frame; a full or closed inbox drops it (counted).
-    pub fn offer(&self, r: Received) {
-        match self.tx.try_send(r) {
-            Ok(()) => {}
-            Err(TrySendError::Full(_) | TrySendError::Disconnected(_)) => {
-                self.dropped.fetch_add(1, Ordering::Relaxed);
-            }
-        }
-    }
-}
-
-/// A bounded inbox of `capacity` frames.
-pub fn inbox(capacity: usize) -> (InboxSender, Inbox) {
-    let (tx, rx) = sync_channel(capacity);
-    let dropped = Arc::new(AtomicU64::new(0));
-    (InboxSender { tx, dropped: dropped.clone() }, Inbox { rx, dropped })
-}
-
-impl Inbox {
-    /// The next frame, waiting at most `timeout` (`None` on timeout or when every sender is gone).
-    pub fn recv_timeout(&self, timeout: Duration) -> Option<Received> {
-        self.rx.recv_timeout(timeout).ok()
-    }
-
-    /// A frame if one is waiting.
-    pub fn try_recv(&self) -> Option<Received> {
-        self.rx.try_recv().ok()
-    }
-
-    /// Frames dropped because the inbox was full.
-    pub fn dropped(&self) -> u64 {
-        self.dropped.load(Ordering::Relaxed)
-    }
-}
+pub type InboxSender = pivotsim_link::InboxSender<Received>;
+pub use pivotsim_link::inbox;
 
 // ---------------------------------------------------------------------------------------------
 // Zenoh
 
 /// The client's Zenoh configuration: a peer, multicast scouting off, listening on `listen`
-/// (nothing by default), connecting to `connect`.
+/// (nothing by default), connecting to `connect` (`pivotsim_link::zenoh_config`).
 pub fn zenoh_config(opts: &ZenohOptions) -> Result<zenoh::Config> {
-    let mut c = zenoh::Config::default();
-    let json = |v: &[String]| serde_json::to_string(v).expect("strings serialize");
-    let set = |c: &mut zenoh::Config, k: &str, v: &str| {
-        c.insert_json5(k, v).map_err(|e| anyhow!("zenoh config `{k}` = {v}: {e}"))
+    let e = pivotsim_link::zenoh_config::ZenohEndpoints {
+        listen: opts.listen.clone(),
+        connect: opts.connect.clone(),
+        ..Default::default()
     };
-    set(&mut c, "mode", "\"peer\"")?;
-    set(&mut c, "connect/endpoints", &json(&opts.connect))?;
-    set(&mut c, "listen/endpoints", &json(&opts.listen))?;
-    set(&mut c, "scouting/multicast/enabled", "false")?;
-    Ok(c)
+    Ok(e.config()?)
 }
 
 /// A Zenoh session connected to the server.
@@ -173,7 +122,8 @@ impl ZenohLink {
             .callback(move |sample| {
                 let recv_ns = now_ns();
                 let topic = msgs::parse_key(sample.key_expr().as_str()).ok().map(|(_, t)| t);
-                tx.offer(Received { topic, recv_ns, bytes: sample.payload().to_bytes().into_owned() });
+                let _ =
+                    tx.offer(Received { topic, recv_ns, bytes: sample.payload().to_bytes().into_owned() });
             })
             .wait()
             .map_err(|e| anyhow!("zenoh: cannot subscribe to {key}: {e}"))?;
@@ -285,39 +235,22 @@ impl ZenohLink {
 // ---------------------------------------------------------------------------------------------
 // iceoryx2
 
-/// The iceoryx2 service name of a world's `what` (`poses`, `stats`, `cmd`).
-pub fn iox_service_name(world: &WorldName, what: &str) -> String {
-    format!("{}/{}/{}", msgs::KEY_PREFIX, world.as_str(), what)
-}
-
 /// Longest initial input frame on the `cmd` service (a boom command of 16 targets is 672 bytes).
 pub const IOX_INPUT_SLICE: usize = 4096;
-/// The server's subscriber buffer size; requested with the same value so that either side may
-/// create the service and the other still opens it.
-pub const IOX_SUBSCRIBER_BUFFER: usize = 16;
 
-type IoxService = iceoryx2::service::port_factory::publish_subscribe::PortFactory<ipc::Service, [u8], ()>;
+type IoxService = pivotsim_link::iox::ByteService;
 
 fn iox_err(what: &str) -> impl Fn(&dyn std::fmt::Debug) -> anyhow::Error + '_ {
     move |e| anyhow!("iceoryx2: {what}: {e:?}")
 }
 
 fn iox_node() -> Result<Node<ipc::Service>> {
-    NodeBuilder::new()
-        .name(&"pivotsim-client".try_into().map_err(|e| iox_err("node name")(&e))?)
-        .signal_handling_mode(SignalHandlingMode::Disabled)
-        .create::<ipc::Service>()
-        .map_err(|e| iox_err("cannot create a node")(&e))
+    Ok(pivotsim_link::iox::node("pivotsim-client")?)
 }
 
-fn iox_service(node: &Node<ipc::Service>, name: &str) -> Result<IoxService> {
-    let sn: ServiceName = name.try_into().map_err(|e| iox_err(name)(&e))?;
-    node.service_builder(&sn)
-        .publish_subscribe::<[u8]>()
-        .enable_safe_overflow(true)
-        .subscriber_max_buffer_size(IOX_SUBSCRIBER_BUFFER)
-        .open_or_create()
-        .map_err(|e| iox_err(&format!("cannot open service {name}"))(&e))
+fn iox_service(node: &Node<ipc::Service>, world: &WorldName, topic: Topic) -> Result<IoxService> {
+    let name = pivotsim_link::iox::service_name(world, topic)?;
+    Ok(pivotsim_link::iox::open_service(node, &name)?)
 }
 
 /// A thread polling iceoryx2 subscribers into an inbox; stops when dropped.
@@ -341,18 +274,21 @@ impl IoxReceiver {
         tx: &InboxSender,
         poll: Duration,
     ) -> Result<IoxReceiver> {
-        let mut names: Vec<(Option<Topic>, String)> = Vec::new();
+        // (topic, the topic to use for opening): inputs share the one `cmd` service, where the
+        // frame's own kind names the topic (`None`).
+        let mut names: Vec<(Option<Topic>, Topic)> = Vec::new();
         for &t in topics {
             match t {
-                Topic::Poses | Topic::Stats => names.push((Some(t), iox_service_name(world, t.suffix()))),
+                Topic::Poses | Topic::Stats => names.push((Some(t), t)),
                 t if Topic::INPUTS.contains(&t) => {
-                    if !names.iter().any(|(_, n)| n.ends_with("/cmd")) {
-                        names.push((None, iox_service_name(world, "cmd")));
+                    if !names.iter().any(|(known, _)| known.is_none()) {
+                        names.push((None, t));
                     }
                 }
                 _ => bail!("iceoryx2 carries no {} service", t.suffix()),
             }
         }
+        let world = world.clone();
         let stop = Arc::new(AtomicBool::new(false));
         let (ready_tx, ready_rx) = sync_channel::<Result<()>>(1);
         let tx = tx.clone();
@@ -364,13 +300,13 @@ impl IoxReceiver {
                     let node = iox_node()?;
                     let mut subs = Vec::new();
                     let mut services = Vec::new();
-                    for (topic, name) in &names {
-                        let s = iox_service(&node, name)?;
+                    for (topic, open_as) in &names {
+                        let s = iox_service(&node, &world, *open_as)?;
                         let sub = s
                             .subscriber_builder()
-                            .buffer_size(IOX_SUBSCRIBER_BUFFER)
+                            .buffer_size(msgs::IOX_SUBSCRIBER_BUFFER)
                             .create()
-                            .map_err(|e| iox_err(&format!("cannot subscribe to {name}"))(&e))?;
+                            .map_err(|e| iox_err(&format!("cannot subscribe to {}", s.name()))(&e))?;
                         subs.push((*topic, sub));
                         services.push(s);
                     }
@@ -397,7 +333,7 @@ impl IoxReceiver {
                                     let bytes = sample.payload().to_vec();
                                     // Inputs on `cmd`: the frame's own kind names the topic.
                                     let topic = topic.or_else(|| input_topic(&bytes));
-                                    tx.offer(Received { topic, recv_ns, bytes });
+                                    let _ = tx.offer(Received { topic, recv_ns, bytes });
                                     any = true;
                                 }
                                 Ok(None) => break,
@@ -464,7 +400,7 @@ impl IoxInputs {
     /// Opens (or creates) the `cmd` service and a publisher on it.
     pub fn open(world: &WorldName) -> Result<IoxInputs> {
         let node = iox_node()?;
-        let service = iox_service(&node, &iox_service_name(world, "cmd"))?;
+        let service = iox_service(&node, world, Topic::Joystick)?;
         let publisher = service
             .publisher_builder()
             .initial_max_slice_len(IOX_INPUT_SLICE)

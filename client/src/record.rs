@@ -31,7 +31,7 @@ use anyhow::{Context, Result, bail};
 use pivotsim_msgs as msgs;
 use pivotsim_msgs::Topic;
 
-use crate::net::{Stream, TransportKind};
+use crate::net::{Received, Stream, TransportKind};
 use crate::tojson;
 use crate::{Common, interrupted, secs};
 
@@ -91,15 +91,15 @@ fn write(
     Ok(())
 }
 
-/// Runs `record`.
-pub fn run(common: &Common, args: &Args) -> Result<ExitCode> {
-    let world = common.world()?;
-    let topics = [Topic::Poses, Topic::Stats, Topic::Joystick, Topic::Winch, Topic::Boom, Topic::Actuator];
-    let stream = Stream::open(common, args.transport, &topics, 8192, Duration::from_micros(500), None)?;
-    let scene = crate::util::scene_best_effort(common, stream.zenoh(), common.timeout_or(2.0));
-    if scene.is_none() {
-        eprintln!("pivotsim-client: no scene description: bodies named by id, no scene channel");
-    }
+type McapWriter = mcap::Writer<BufWriter<File>>;
+
+/// The file with its metadata (world, transport, scene, step) and the channels known from the
+/// start: poses, stats, transforms (unless `--no-tf`) and the scene (written at once).
+fn open_file(
+    args: &Args,
+    world: &msgs::WorldName,
+    scene: Option<&msgs::SceneDescription>,
+) -> Result<(McapWriter, Channels)> {
     let file = File::create(&args.file).with_context(|| format!("cannot create {}", args.file.display()))?;
     let mut w = mcap::Writer::with_options(
         BufWriter::new(file),
@@ -108,7 +108,7 @@ pub fn run(common: &Common, args: &Args) -> Result<ExitCode> {
     let mut meta = BTreeMap::new();
     meta.insert("world".to_string(), world.to_string());
     meta.insert("transport".to_string(), format!("{:?}", args.transport).to_lowercase());
-    if let Some(s) = &scene {
+    if let Some(s) = scene {
         meta.insert("scene".to_string(), s.scene.clone());
         meta.insert("timestep".to_string(), s.timestep.to_string());
     }
@@ -139,21 +139,112 @@ pub fn run(common: &Common, args: &Args) -> Result<ExitCode> {
             &tojson::frame_transforms_schema(),
         )?);
     }
-    if let Some(s) = &scene {
+    if let Some(s) = scene {
         let id = add_json_channel(
             &mut w,
             &world.key(Topic::Scene),
             "pivotsim.SceneDescription",
-            &serde_json::json!({"title": "pivotsim.SceneDescription", "type": "object",
-                "description": "the scene description frame of pivotsim-msgs (msgs/README.md)"}),
+            &tojson::scene_schema(),
         )?;
         let now = crate::net::now_ns();
         write(&mut w, id, 0, now, now, &serde_json::to_value(s)?)?;
     }
+    Ok((w, ch))
+}
+
+/// What was written so far.
+#[derive(Debug, Default)]
+struct Counts {
+    poses: u64,
+    stats: u64,
+    inputs: u64,
+    malformed: u64,
+}
+
+/// The recording: the file, its channels and the counts.
+struct Recorder<'a> {
+    w: McapWriter,
+    ch: Channels,
+    world: &'a msgs::WorldName,
+    scene: Option<&'a msgs::SceneDescription>,
+    n: Counts,
+}
+
+impl Recorder<'_> {
+    /// A pose frame, and its transforms unless `--no-tf`.
+    fn poses(&mut self, r: &Received) -> Result<bool> {
+        let Ok(v) = msgs::PoseFrameView::parse(&r.bytes) else { return Ok(false) };
+        let seq = v.sequence() as u32;
+        let json = tojson::pose_json(&v, self.scene, |_| true);
+        write(&mut self.w, self.ch.poses, seq, r.recv_ns, v.wall_time_ns(), &json)?;
+        if let Some(tf) = self.ch.tf {
+            let json = tojson::frame_transforms_json(&v, self.scene);
+            write(&mut self.w, tf, seq, r.recv_ns, v.wall_time_ns(), &json)?;
+        }
+        self.n.poses += 1;
+        Ok(true)
+    }
+
+    fn stats(&mut self, r: &Received) -> Result<bool> {
+        let Ok(s) = msgs::SolverStats::decode(&r.bytes) else { return Ok(false) };
+        write(&mut self.w, self.ch.stats, s.sequence as u32, r.recv_ns, r.recv_ns, &tojson::stats_json(&s))?;
+        self.n.stats += 1;
+        Ok(true)
+    }
+
+    /// An input, on its topic's channel (added at its first message).
+    fn input(&mut self, r: &Received) -> Result<bool> {
+        let Ok(c) = msgs::InputCommand::decode(&r.bytes) else { return Ok(false) };
+        let topic = crate::send::topic_of(&c);
+        let id = match self.ch.inputs.iter().find(|(t, _)| *t == topic) {
+            Some((_, id)) => *id,
+            None => {
+                let id = add_json_channel(
+                    &mut self.w,
+                    &self.world.key(topic),
+                    tojson::input_schema_name(topic),
+                    &tojson::input_schema(topic),
+                )?;
+                self.ch.inputs.push((topic, id));
+                id
+            }
+        };
+        write(&mut self.w, id, self.ch.input_seq, r.recv_ns, r.recv_ns, &tojson::input_json(&c))?;
+        self.ch.input_seq = self.ch.input_seq.wrapping_add(1);
+        self.n.inputs += 1;
+        Ok(true)
+    }
+
+    /// One received frame; `true` for a frame from the server (poses or stats).
+    fn frame(&mut self, r: &Received) -> Result<bool> {
+        let (from_server, ok) = match r.topic {
+            Some(Topic::Poses) => (true, self.poses(r)?),
+            Some(Topic::Stats) => (true, self.stats(r)?),
+            Some(t) if Topic::INPUTS.contains(&t) => (false, self.input(r)?),
+            _ => (false, false),
+        };
+        if !ok {
+            self.n.malformed += 1;
+        }
+        Ok(from_server && ok)
+    }
+}
+
+/// Runs `record`: the stream and the scene, the file, then frames until the end, the count,
+/// Ctrl-C or a silence longer than `--timeout`.
+pub fn run(common: &Common, args: &Args) -> Result<ExitCode> {
+    let world = common.world()?;
+    let topics = [Topic::Poses, Topic::Stats, Topic::Joystick, Topic::Winch, Topic::Boom, Topic::Actuator];
+    let stream = Stream::open(common, args.transport, &topics, 8192, Duration::from_micros(500), None)?;
+    let scene = crate::util::scene_best_effort(common, stream.zenoh(), common.timeout_or(2.0));
+    if scene.is_none() {
+        eprintln!("pivotsim-client: no scene description: bodies named by id, no scene channel");
+    }
+    let (w, ch) = open_file(args, &world, scene.as_ref())?;
+    let mut rec = Recorder { w, ch, world: &world, scene: scene.as_ref(), n: Counts::default() };
     let end = args.duration.map(|d| Instant::now() + secs(d));
     let idle = common.timeout.map(secs);
     let tty = std::io::stderr().is_terminal();
-    let (mut n_poses, mut n_stats, mut n_inputs, mut malformed) = (0u64, 0u64, 0u64, 0u64);
     let mut last_frame = Instant::now();
     let mut last_status = Instant::now();
     let start = Instant::now();
@@ -166,7 +257,7 @@ pub fn run(common: &Common, args: &Args) -> Result<ExitCode> {
     loop {
         if interrupted()
             || end.is_some_and(|e| Instant::now() >= e)
-            || args.count.is_some_and(|c| n_poses >= c)
+            || args.count.is_some_and(|c| rec.n.poses >= c)
         {
             break;
         }
@@ -178,90 +269,37 @@ pub fn run(common: &Common, args: &Args) -> Result<ExitCode> {
         }
         if tty && last_status.elapsed() >= Duration::from_secs(1) {
             last_status = Instant::now();
+            let n = &rec.n;
             eprint!(
-                "\r{:6.1} s  poses {n_poses}  stats {n_stats}  inputs {n_inputs}  malformed {malformed}  dropped {}   ",
+                "\r{:6.1} s  poses {}  stats {}  inputs {}  malformed {}  dropped {}   ",
                 start.elapsed().as_secs_f64(),
+                n.poses,
+                n.stats,
+                n.inputs,
+                n.malformed,
                 stream.inbox.dropped()
             );
         }
         let Some(r) = stream.inbox.recv_timeout(Duration::from_millis(50)) else { continue };
-        match r.topic {
-            Some(Topic::Poses) => match msgs::PoseFrameView::parse(&r.bytes) {
-                Ok(v) => {
-                    let seq = v.sequence() as u32;
-                    write(
-                        &mut w,
-                        ch.poses,
-                        seq,
-                        r.recv_ns,
-                        v.wall_time_ns(),
-                        &tojson::pose_json(&v, scene.as_ref(), |_| true),
-                    )?;
-                    if let Some(tf) = ch.tf {
-                        write(
-                            &mut w,
-                            tf,
-                            seq,
-                            r.recv_ns,
-                            v.wall_time_ns(),
-                            &tojson::frame_transforms_json(&v, scene.as_ref()),
-                        )?;
-                    }
-                    n_poses += 1;
-                    last_frame = Instant::now();
-                }
-                Err(_) => malformed += 1,
-            },
-            Some(Topic::Stats) => match msgs::SolverStats::decode(&r.bytes) {
-                Ok(s) => {
-                    write(
-                        &mut w,
-                        ch.stats,
-                        s.sequence as u32,
-                        r.recv_ns,
-                        r.recv_ns,
-                        &tojson::stats_json(&s),
-                    )?;
-                    n_stats += 1;
-                    last_frame = Instant::now();
-                }
-                Err(_) => malformed += 1,
-            },
-            Some(t) if Topic::INPUTS.contains(&t) => match msgs::InputCommand::decode(&r.bytes) {
-                Ok(c) => {
-                    let topic = crate::send::topic_of(&c);
-                    let id = match ch.inputs.iter().find(|(t, _)| *t == topic) {
-                        Some((_, id)) => *id,
-                        None => {
-                            let id = add_json_channel(
-                                &mut w,
-                                &world.key(topic),
-                                tojson::input_schema_name(topic),
-                                &tojson::input_schema(topic),
-                            )?;
-                            ch.inputs.push((topic, id));
-                            id
-                        }
-                    };
-                    write(&mut w, id, ch.input_seq, r.recv_ns, r.recv_ns, &tojson::input_json(&c))?;
-                    ch.input_seq = ch.input_seq.wrapping_add(1);
-                    n_inputs += 1;
-                }
-                Err(_) => malformed += 1,
-            },
-            _ => malformed += 1,
+        if rec.frame(&r)? {
+            last_frame = Instant::now();
         }
     }
-    w.finish()?;
-    let mut inner = w.into_inner();
+    rec.w.finish()?;
+    let mut inner = rec.w.into_inner();
     inner.flush()?;
     if tty {
         eprintln!();
     }
+    let n = &rec.n;
     eprintln!(
-        "pivotsim-client: wrote {}: {n_poses} pose frames, {n_stats} stats, {n_inputs} inputs in {:.1} s ({malformed} malformed skipped, {} dropped)",
+        "pivotsim-client: wrote {}: {} pose frames, {} stats, {} inputs in {:.1} s ({} malformed skipped, {} dropped)",
         args.file.display(),
+        n.poses,
+        n.stats,
+        n.inputs,
         start.elapsed().as_secs_f64(),
+        n.malformed,
         stream.inbox.dropped()
     );
     if let Err(e) = outcome {

@@ -169,6 +169,69 @@ pub fn stats_schema() -> Value {
     })
 }
 
+/// JSON schema of the scene description (`msgs::SceneDescription` as it serializes; the field
+/// rules are those of `msgs/README.md`).
+pub fn scene_schema() -> Value {
+    let int = json!({"type": "integer"});
+    let num = json!({"type": "number"});
+    let s = json!({"type": "string"});
+    let nums = |n: usize| json!({"type": "array", "items": num, "minItems": n, "maxItems": n});
+    let names = |v: &[&str]| json!({"type": "string", "enum": v});
+    let modes: Vec<&str> = msgs::ActuatorMode::ALL.iter().map(|m| m.name()).collect();
+    let shape = |kind: &str, props: Value| {
+        let mut p = props.as_object().cloned().unwrap_or_default();
+        p.insert("type".into(), json!({"const": kind}));
+        let required: Vec<String> = p.keys().cloned().collect();
+        json!({"type": "object", "properties": p, "required": required})
+    };
+    let reference = json!({"type": "object", "properties": {"reference": s}, "required": ["reference"]});
+    let inline_heights = json!({"type": "object", "properties": {"inline": {"type": "array", "items": num}}, "required": ["inline"]});
+    let inline_mesh = json!({"type": "object", "required": ["inline"], "properties": {"inline": {"type": "object",
+        "properties": {"vertices": {"type": "array", "items": nums(3)},
+                       "triangles": {"type": "array", "items": {"type": "array", "items": int}}}}}});
+    let shapes = vec![
+        shape("ball", json!({"radius": num})),
+        shape("box", json!({"half_extents": nums(3)})),
+        shape("capsule", json!({"radius": num, "half_height": num})),
+        shape("cylinder", json!({"radius": num, "half_height": num})),
+        shape("convex_hull", json!({"vertices": {"type": "array", "items": nums(3)}})),
+        shape(
+            "heightfield",
+            json!({"rows": int, "cols": int, "extent": nums(2), "heights": {"oneOf": [inline_heights, reference.clone()]}}),
+        ),
+        shape("trimesh", json!({"mesh": {"oneOf": [inline_mesh, reference]}})),
+    ];
+    let collider = json!({"type": "object", "properties": {
+        "shape": {"oneOf": shapes}, "position": nums(3), "orientation": nums(4)}});
+    let body = json!({"type": "object", "properties": {
+        "id": int, "name": s, "kind": names(&["dynamic", "kinematic", "static"]), "mass": num,
+        "colliders": {"type": "array", "items": collider}}});
+    let joint = json!({"type": "object", "properties": {
+        "name": s, "kind": names(&["fixed", "hinge", "prismatic", "ball", "other"]),
+        "parent": {"type": ["integer", "null"]}, "child": int}});
+    let actuator = json!({"type": "object", "properties": {
+        "name": s, "kind": names(&["motor", "winch"]), "joint": {"type": ["string", "null"]},
+        "mode": names(&modes), "limits": {"oneOf": [nums(2), {"type": "null"}]}}});
+    let input = json!({"oneOf": [
+        {"type": "object", "properties": {"axis": int}, "required": ["axis"]},
+        {"type": "object", "properties": {"button": int}, "required": ["button"]}]});
+    let binding = json!({"type": "object", "properties": {
+        "input": input, "actuator": s, "mode": names(&modes), "scale": num}});
+    json!({
+        "title": "pivotsim.SceneDescription",
+        "description": "Everything a renderer needs about a world: bodies with their collision shapes, joints, actuators, the joystick mapping (SI units, z up; msgs/README.md)",
+        "type": "object",
+        "properties": {
+            "world": s, "scene": s, "timestep": num, "gravity": nums(3),
+            "bodies": {"type": "array", "items": body},
+            "joints": {"type": "array", "items": joint},
+            "actuators": {"type": "array", "items": actuator},
+            "joystick": {"type": "array", "items": binding},
+        },
+        "required": ["world", "scene", "timestep", "gravity", "bodies", "joints", "actuators", "joystick"],
+    })
+}
+
 /// JSON schema of [`input_json`] for an input topic.
 pub fn input_schema(topic: msgs::Topic) -> Value {
     let int = json!({"type": "integer"});
@@ -254,6 +317,58 @@ pub fn frame_transforms_schema() -> Value {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn scene_schema_names_every_field_of_a_description() {
+        let scene = msgs::SceneDescription {
+            world: "w".into(),
+            scene: "s".into(),
+            timestep: 0.01,
+            bodies: vec![msgs::BodyInfo {
+                id: 1,
+                name: "b".into(),
+                kind: msgs::BodyKind::Dynamic,
+                mass: 1.0,
+                colliders: vec![msgs::Collider {
+                    shape: msgs::Shape::Ball { radius: 0.5 },
+                    position: [0.0; 3],
+                    orientation: [0.0, 0.0, 0.0, 1.0],
+                }],
+            }],
+            joints: vec![msgs::JointInfo {
+                name: "j".into(),
+                kind: msgs::JointKind::Hinge,
+                parent: None,
+                child: 1,
+            }],
+            actuators: vec![msgs::ActuatorInfo {
+                name: "a".into(),
+                kind: msgs::ActuatorKind::Motor,
+                joint: Some("j".into()),
+                mode: msgs::ActuatorMode::Velocity,
+                limits: None,
+            }],
+            joystick: vec![msgs::JoystickBinding {
+                input: msgs::JoystickInput::Axis(0),
+                actuator: "a".into(),
+                mode: msgs::ActuatorMode::Velocity,
+                scale: 1.0,
+            }],
+            ..Default::default()
+        };
+        let v = serde_json::to_value(&scene).unwrap();
+        let schema = scene_schema();
+        let props = &schema["properties"];
+        for (k, field) in v.as_object().unwrap() {
+            let p = props.get(k).unwrap_or_else(|| panic!("{k} not in the schema"));
+            if let Some(item) = field.as_array().and_then(|a| a.first()).and_then(|x| x.as_object()) {
+                for kk in item.keys() {
+                    assert!(p["items"]["properties"].get(kk).is_some(), "{k}.{kk} not in the schema");
+                }
+            }
+        }
+        assert_eq!(schema["required"].as_array().unwrap().len(), v.as_object().unwrap().len());
+    }
 
     #[test]
     fn pose_json_has_the_schema_fields() {

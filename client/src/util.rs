@@ -79,6 +79,28 @@ pub struct FrameCounts {
     pub malformed: u64,
 }
 
+/// Sequences a stream skipped: the server numbers its steps `+1` each and never restarts them, so
+/// a jump from `s` to `s + k` lost `k − 1` steps on the way (a repeat, `k = 0`, is a paused
+/// server's re-send; a step back is another server's stream or a restart and counts nothing).
+#[derive(Debug, Default, Clone, Copy)]
+pub struct SequenceGaps {
+    last: Option<u64>,
+    /// Steps never received.
+    pub skipped: u64,
+}
+
+impl SequenceGaps {
+    /// Records the sequence of a received frame.
+    pub fn see(&mut self, seq: u64) {
+        if let Some(last) = self.last
+            && seq > last
+        {
+            self.skipped = self.skipped.saturating_add(seq - last - 1);
+        }
+        self.last = Some(seq);
+    }
+}
+
 /// The scene description if a server answers on Zenoh within `timeout` (for body names); `None`
 /// otherwise. Opens its own session when `link` is `None`.
 pub fn scene_best_effort(
@@ -129,6 +151,18 @@ pub fn euler_zyx(q: [f64; 4]) -> [f64; 3] {
 
 #[cfg(test)]
 mod tests {
+    #[test]
+    fn sequence_gaps_count_skipped_steps_only() {
+        let mut g = SequenceGaps::default();
+        for s in [539, 540, 540, 541, 1245, 1246] {
+            g.see(s);
+        }
+        assert_eq!(g.skipped, 1245 - 541 - 1);
+        g.see(3);
+        g.see(4);
+        assert_eq!(g.skipped, 703);
+    }
+
     use super::*;
 
     #[test]

@@ -307,6 +307,7 @@ pub fn run(common: &Common, args: &Args) -> Result<ExitCode> {
     let mut stats: Option<msgs::SolverStats> = None;
     let mut shown = 0u64;
     let mut last_seq: Option<u64> = None;
+    let mut gaps = crate::util::SequenceGaps::default();
     let mut selected_for: Option<(usize, Option<String>)> = None;
     let mut scene_tried = Instant::now();
     let done = |shown: u64| args.count.is_some_and(|c| shown >= c);
@@ -325,7 +326,7 @@ pub fn run(common: &Common, args: &Args) -> Result<ExitCode> {
             break;
         }
         let Some(r) = stream.inbox.recv_timeout(Duration::from_millis(50)) else { continue };
-        view.dropped = stream.inbox.dropped();
+        view.dropped = stream.inbox.dropped() + gaps.skipped;
         match r.topic {
             Some(Topic::Poses) => match msgs::PoseFrameView::parse(&r.bytes) {
                 Ok(v) => {
@@ -353,8 +354,9 @@ pub fn run(common: &Common, args: &Args) -> Result<ExitCode> {
                             break;
                         }
                     }
+                    gaps.see(v.sequence());
                     if last_seq.is_some_and(|s| v.sequence() < s) {
-                        // Reset or a new scene: sequences start again.
+                        // Another server's stream (or a restarted server): sequences went back.
                         stats = None;
                     }
                     last_seq = Some(v.sequence());
@@ -386,9 +388,12 @@ pub fn run(common: &Common, args: &Args) -> Result<ExitCode> {
         shown += 1;
     }
     eprintln!(
-        "pivotsim-client: {shown} steps shown; {} frames ok, {} malformed (skipped), {} dropped",
+        "pivotsim-client: {shown} steps shown; {} frames ok, {} malformed (skipped), {} dropped \
+         ({} steps never arrived, {} frames over the inbox)",
         view.counts.ok,
         view.counts.malformed,
+        stream.inbox.dropped() + gaps.skipped,
+        gaps.skipped,
         stream.inbox.dropped()
     );
     if let Err(e) = outcome {

@@ -5,7 +5,7 @@ mod common;
 
 use std::time::{Duration, Instant};
 
-use common::{DRUM, Server, field, spawn_client};
+use common::{ClientOf, DRUM, Server, field, spawn_client};
 use serde_json::Value;
 
 const LIMIT: Duration = Duration::from_secs(30);
@@ -74,7 +74,7 @@ fn scene_answers_with_the_bodies() {
     let d: pivotsim_msgs::SceneDescription = serde_json::from_str(&out.stdout).expect("scene JSON");
     let names: Vec<&str> = d.bodies.iter().map(|b| b.name.as_str()).collect();
     assert_eq!(names, ["drum", "slider"]);
-    assert_eq!(d.world, s.world);
+    assert_eq!(d.world, s.world.as_str());
     assert_eq!(d.actuators.len(), 2);
 }
 
@@ -271,7 +271,7 @@ fn record_over_iceoryx2_writes_every_channel() {
     rec.interrupt();
     let out = rec.wait().ok();
     assert!(out.stderr.contains("4 inputs"), "{}", out.stderr);
-    check_recording(&path, &s.world);
+    check_recording(&path, s.world.as_str());
     let _ = std::fs::remove_dir_all(&dir);
 }
 
@@ -293,7 +293,7 @@ fn record_over_zenoh_sees_inputs_of_peers_connected_to_it() {
     send_all_four(&a);
     rec.interrupt();
     let out = rec.wait().ok();
-    check_recording(&path, &s.world);
+    check_recording(&path, s.world.as_str());
     assert!(out.stderr.contains("0 malformed"), "{}", out.stderr);
     let _ = std::fs::remove_dir_all(&dir);
 }

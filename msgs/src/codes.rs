@@ -3,7 +3,7 @@
 //! | enum | code → name |
 //! |---|---|
 //! | [`SolverVariant`] | 0 `full`, 1 `downdate`, 2 `skyline`, 3 `skyline-refactor`, 4 `incremental`, 5 `auto`, 6 `pgs` |
-//! | [`SolveStatus`] | 0 `converged`, 1 `inexact`, 2 `max-steps`, 3 `empty`, 4 `non-finite` |
+//! | [`SolveStatus`] | 0 `converged`, 1 `inexact`, 2 `max-steps`, 3 `empty`, 4 `non-finite`, 5 `budget` |
 //! | [`ActuatorMode`] | 0 `velocity`, 1 `position`, 2 `effort` |
 //! | [`RejectReason`] | 0 `malformed`, 1 `version`, 2 `non-finite`, 3 `out-of-range`, 4 `unknown-actuator`, 5 `oversize`, 6 `stale`, 7 `other` |
 //!
@@ -111,6 +111,8 @@ coded_enum! {
         Empty = 3 => "empty",
         /// A non-finite value appeared; best finite iterate returned.
         NonFinite = 4 => "non-finite",
+        /// The step's time budget was spent; best safe iterate returned.
+        Budget = 5 => "budget",
     }
 }
 
@@ -148,11 +150,13 @@ coded_enum! {
         Stale = 6 => "stale",
         /// Anything else (server policy).
         Other = 7 => "other",
+        /// An actuator command whose `mode` is not the scene actuator's mode.
+        WrongMode = 8 => "wrong-mode",
     }
 }
 
 /// Number of [`RejectReason`] counters in a stats frame.
-pub const REJECT_REASONS: usize = 8;
+pub const REJECT_REASONS: usize = 9;
 
 #[cfg(test)]
 mod tests {

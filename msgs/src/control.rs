@@ -179,6 +179,23 @@ pub enum ControlError {
     },
 }
 
+impl ControlError {
+    /// The reply code for a request that failed with this error: `unknown_variant` for a variant
+    /// name the server does not know, `invalid_request` for everything else.
+    pub fn code(&self) -> ControlErrorCode {
+        match self {
+            ControlError::UnknownVariant { .. } => ControlErrorCode::UnknownVariant,
+            ControlError::StepCount { .. }
+            | ControlError::EmptyScene
+            | ControlError::SceneTooLong { .. }
+            | ControlError::SceneChar { .. }
+            | ControlError::MessageTooLong { .. }
+            | ControlError::SimTime { .. }
+            | ControlError::TooLarge { .. } => ControlErrorCode::InvalidRequest,
+        }
+    }
+}
+
 pub(crate) fn check_scene_ref(s: &str) -> Result<(), ControlError> {
     if s.is_empty() {
         return Err(ControlError::EmptyScene);
@@ -261,6 +278,24 @@ impl ControlRequest {
         buf.clear();
         self.validate()?;
         json::encode(buf, Kind::ControlRequest, self).map_err(|len| ControlError::TooLarge { len })
+    }
+
+    /// The `id` of a request frame that may not decode as a whole (an unknown op, a bad field),
+    /// so that the failure reply can echo it: the header must be a control request's and the
+    /// payload a JSON object with an integer `id`; otherwise `None` (the reply then carries 0).
+    pub fn peek_id(bytes: &[u8]) -> Option<u64> {
+        #[derive(serde::Deserialize)]
+        struct Id {
+            id: u64,
+        }
+        json::decode::<Id>(bytes, Kind::ControlRequest).ok().map(|r| r.id)
+    }
+
+    /// The failure reply to a request frame that did not decode: the request's id when it can be
+    /// read ([`ControlRequest::peek_id`]), and the code of the error ([`ControlError::code`]).
+    pub fn rejection(bytes: &[u8], error: &DecodeError<ControlError>) -> ControlReply {
+        let code = error.invalid().map_or(ControlErrorCode::InvalidRequest, ControlError::code);
+        ControlReply::error(ControlRequest::peek_id(bytes).unwrap_or(0), code, error.to_string())
     }
 
     /// Decodes and validates a request frame.
@@ -381,6 +416,35 @@ mod tests {
             ControlRequest::decode(&b),
             Err(DecodeError::Invalid(ControlError::UnknownVariant { name: "fast".into() }))
         );
+    }
+
+    #[test]
+    fn a_failing_request_is_answered_with_its_id_and_code() {
+        let cases = [
+            (
+                r#"{"id":41,"command":{"op":"set_variant","variant":"fast"}}"#,
+                41,
+                ControlErrorCode::UnknownVariant,
+            ),
+            (r#"{"id":42,"command":{"op":"explode"}}"#, 42, ControlErrorCode::InvalidRequest),
+            (r#"{"id":43,"command":{"op":"step","count":0}}"#, 43, ControlErrorCode::InvalidRequest),
+            (r#"{"id":44,"command":{"op":"pause"},"extra":true}"#, 44, ControlErrorCode::InvalidRequest),
+            (r#"{"command":{"op":"pause"}}"#, 0, ControlErrorCode::InvalidRequest),
+            (r#"{"id":-1,"command":{"op":"pause"}}"#, 0, ControlErrorCode::InvalidRequest),
+            ("not json", 0, ControlErrorCode::InvalidRequest),
+        ];
+        for (j, id, code) in cases {
+            let b = frame(Kind::ControlRequest, j);
+            let e = ControlRequest::decode(&b).unwrap_err();
+            let r = ControlRequest::rejection(&b, &e);
+            assert_eq!(r.id, id, "{j}");
+            match r.outcome {
+                ControlOutcome::Error(f) => assert_eq!(f.code, code, "{j}"),
+                ControlOutcome::Ok(_) => panic!("{j}: ok"),
+            }
+        }
+        // Another kind's frame: no id is read from it.
+        assert_eq!(ControlRequest::peek_id(&frame(Kind::ControlReply, r#"{"id":5}"#)), None);
     }
 
     #[test]

@@ -3,7 +3,7 @@
 //! ```text
 //! offset size field
 //!      0    4 magic            b"PVSM"
-//!      4    2 version          u16 LE, FORMAT_VERSION (1)
+//!      4    2 version          u16 LE, FORMAT_VERSION (2)
 //!      6    2 kind             u16 LE, Kind code
 //!      8    4 payload_len      u32 LE, bytes after the header
 //!     12    4 flags            u32 LE, reserved: 0 in version 1
@@ -20,7 +20,7 @@ use crate::le;
 /// First four bytes of every frame.
 pub const MAGIC: [u8; 4] = *b"PVSM";
 /// Version written by this crate and the only one it decodes.
-pub const FORMAT_VERSION: u16 = 1;
+pub const FORMAT_VERSION: u16 = 2;
 /// Bytes of the header.
 pub const HEADER_LEN: usize = 16;
 /// Largest frame of any kind, header included (16 MiB).
@@ -333,7 +333,7 @@ mod tests {
     fn frame(kind: u16, payload: &[u8]) -> Vec<u8> {
         let mut b = Vec::new();
         b.extend_from_slice(b"PVSM");
-        b.extend_from_slice(&1u16.to_le_bytes());
+        b.extend_from_slice(&FORMAT_VERSION.to_le_bytes());
         b.extend_from_slice(&kind.to_le_bytes());
         b.extend_from_slice(&(payload.len() as u32).to_le_bytes());
         b.extend_from_slice(&0u32.to_le_bytes());
@@ -359,8 +359,8 @@ mod tests {
         b[0] = b'X';
         assert!(matches!(peek(&b), Err(FrameError::BadMagic { .. })));
         let mut b = ok.clone();
-        b[4] = 2;
-        assert_eq!(peek(&b), Err(FrameError::UnsupportedVersion { found: 2 }));
+        b[4] = 3;
+        assert_eq!(peek(&b), Err(FrameError::UnsupportedVersion { found: 3 }));
         let mut b = ok.clone();
         b[6] = 0x77;
         assert_eq!(peek(&b), Err(FrameError::UnknownKind { found: 0x77 }));

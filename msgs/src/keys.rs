@@ -16,7 +16,8 @@
 //! A world name is 1 to 64 bytes of `[A-Za-z0-9_-]`, so a key never contains the Zenoh wildcard or
 //! separator characters and stays far below iceoryx2's service-name limit. On Zenoh the server may
 //! subscribe to all inputs at once with [`inputs_wildcard`] (`pivotsim/<world>/cmd/**`); iceoryx2
-//! has no wildcards, so it opens one service per input topic.
+//! has no wildcards, so every input goes to the one service `pivotsim/<world>/cmd`
+//! ([`WorldName::iox_service`]), where the frame's header says what it is.
 
 use std::fmt;
 
@@ -26,6 +27,13 @@ pub const KEY_PREFIX: &str = "pivotsim";
 pub const MAX_WORLD_NAME_LEN: usize = 64;
 /// World name used when none is given.
 pub const DEFAULT_WORLD: &str = "default";
+/// Last segment of the Zenoh liveliness token of a world's server ([`WorldName::server_token`]).
+pub const SERVER_TOKEN: &str = "server";
+/// Last segment of the one iceoryx2 service that carries every input frame.
+pub const IOX_INPUT_SERVICE: &str = "cmd";
+/// Samples a subscriber of the server's iceoryx2 services buffers: the server creates them with
+/// this, and a client that creates them first must ask for the same.
+pub const IOX_SUBSCRIBER_BUFFER: usize = 16;
 
 /// Why a world name or key expression is not valid.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
@@ -92,6 +100,26 @@ impl WorldName {
         let mut s = String::new();
         self.write_key(topic, &mut s);
         s
+    }
+
+    /// The iceoryx2 service that carries `topic` in this world: the key for poses and stats, the
+    /// one input service `pivotsim/<world>/cmd` for every input topic, and `None` for the
+    /// queryables (Zenoh only).
+    pub fn iox_service(&self, topic: Topic) -> Option<String> {
+        match topic {
+            Topic::Poses | Topic::Stats => Some(self.key(topic)),
+            Topic::Joystick | Topic::Winch | Topic::Boom | Topic::Actuator => {
+                Some(format!("{KEY_PREFIX}/{}/{IOX_INPUT_SERVICE}", self.0))
+            }
+            Topic::Scene | Topic::Control => None,
+        }
+    }
+
+    /// The Zenoh liveliness token a server holds while it serves this world
+    /// (`pivotsim/<world>/server`): a second server of the same world sees it and refuses to
+    /// start, and clients may watch it to know whether a server is up.
+    pub fn server_token(&self) -> String {
+        format!("{KEY_PREFIX}/{}/{SERVER_TOKEN}", self.0)
     }
 
     /// Clears `out` and writes the key of `topic` into it (no allocation once `out` has grown).
@@ -231,6 +259,18 @@ pub fn parse_key(key: &str) -> Result<(WorldName, Topic), KeyError> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn iceoryx2_services_are_the_documented_strings() {
+        let w = WorldName::new("crane-1").unwrap();
+        assert_eq!(w.iox_service(Topic::Poses).as_deref(), Some("pivotsim/crane-1/poses"));
+        assert_eq!(w.iox_service(Topic::Stats).as_deref(), Some("pivotsim/crane-1/stats"));
+        for t in Topic::INPUTS {
+            assert_eq!(w.iox_service(t).as_deref(), Some("pivotsim/crane-1/cmd"));
+        }
+        assert_eq!(w.iox_service(Topic::Scene), None);
+        assert_eq!(w.iox_service(Topic::Control), None);
+    }
 
     #[test]
     fn keys_are_the_documented_strings() {

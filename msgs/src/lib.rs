@@ -41,7 +41,8 @@ pub use input::{
     InputError, JOYSTICK_LEN, Joystick, MAX_AXES, MAX_BOOM_TARGETS, MAX_BUTTONS, WINCH_LEN, WinchCommand,
 };
 pub use keys::{
-    DEFAULT_WORLD, KEY_PREFIX, KeyError, MAX_WORLD_NAME_LEN, Topic, WorldName, inputs_wildcard, parse_key,
+    DEFAULT_WORLD, IOX_INPUT_SERVICE, IOX_SUBSCRIBER_BUFFER, KEY_PREFIX, KeyError, MAX_WORLD_NAME_LEN,
+    SERVER_TOKEN, Topic, WorldName, inputs_wildcard, parse_key,
 };
 pub use message::{Message, MessageError};
 pub use name::{ActuatorName, MAX_ACTUATOR_NAME_LEN, NameError, is_name_byte, validate_actuator_name};
@@ -50,7 +51,7 @@ pub use pose::{
     MAX_BODIES, POSE_FIXED_LEN, PoseError, PoseFrame, PoseFrameView, PoseFrameWriter, QUAT_NORM_TOLERANCE,
 };
 pub use scene::*;
-pub use stats::{
+pub use stats::{DegradedSolves, 
     ISLAND_FALLBACK, ISLAND_RECORD_LEN, InputHealth, IslandStats, MAX_ISLANDS, STATS_FIXED_LEN, SolverStats,
     StatsError, StepTotals,
 };

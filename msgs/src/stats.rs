@@ -16,12 +16,16 @@
 //!             56     8  total_solve_us    f64, µs
 //!             64     8  max_residual_rel  f64
 //!             72     8  inputs_accepted   u64, since start
-//!             80    64  inputs_rejected   u64 × 8, since start, indexed by RejectReason code
-//!            144     4  deadman_trips     u32, since start
-//!            148     1  deadman_active    u8, 0 or 1: actuators are held at neutral now
-//!            149     1  unstable          u8, 0 or 1: the server's instability watchdog flagged this step
-//!            150     2  unstable_steps    u16, steps flagged since the scene was (re)loaded, saturating
-//!            152    40  island record × island_count
+//!             80    72  inputs_rejected   u64 × 9, since start, indexed by RejectReason code
+//!            152     4  deadman_trips     u32, since start
+//!            156     1  deadman_active    u8, 0 or 1: actuators are held at neutral now
+//!            157     1  unstable          u8, 0 or 1: the server's instability watchdog flagged this step
+//!            158     2  unstable_steps    u16, steps flagged since the scene was (re)loaded, saturating
+//!            160     4  solves_capped     u32, island solves stopped by the pivot-step cap, since (re)load
+//!            164     4  solves_inexact    u32, island solves that ended inexact, since (re)load
+//!            168     4  solves_budget     u32, island solves stopped by the time budget, since (re)load
+//!            172     4  solves_fallback   u32, island solves in which a safeguard ran, since (re)load
+//!            176    40  island record × island_count
 //!
 //! island record   size  field
 //!              0     1  variant           u8, SolverVariant code
@@ -45,7 +49,7 @@ use crate::header::{self, DecodeError, FrameError, HEADER_LEN, Kind};
 use crate::le;
 
 /// Bytes of the fixed part of the payload.
-pub const STATS_FIXED_LEN: usize = 152;
+pub const STATS_FIXED_LEN: usize = 176;
 /// Bytes of one island record.
 pub const ISLAND_RECORD_LEN: usize = 40;
 /// Most islands in one frame.
@@ -167,6 +171,33 @@ pub struct SolverStats {
     pub unstable: bool,
     /// Steps the watchdog flagged since the scene was (re)loaded, saturating at 65 535.
     pub unstable_steps: u16,
+    /// Degraded island solves since the scene was (re)loaded: none is silent.
+    pub degraded: DegradedSolves,
+}
+
+/// Island solves that did not end exact, counted since the scene was (re)loaded (saturating), so
+/// that a receiver that drops frames still sees every one.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct DegradedSolves {
+    /// Stopped by the pivot-step cap (status `max-steps`).
+    pub capped: u32,
+    /// Ended inexact.
+    pub inexact: u32,
+    /// Stopped by the time budget (status `budget`).
+    pub budget: u32,
+    /// A safeguard of the pivoting ran (the island's fallback flag).
+    pub fallback: u32,
+}
+
+impl DegradedSolves {
+    /// Counts one island's solve (saturating).
+    pub fn count(&mut self, status: SolveStatus, fallback: bool) {
+        let add = |c: &mut u32, yes: bool| *c = c.saturating_add(u32::from(yes));
+        add(&mut self.capped, status == SolveStatus::MaxSteps);
+        add(&mut self.inexact, status == SolveStatus::Inexact);
+        add(&mut self.budget, status == SolveStatus::Budget);
+        add(&mut self.fallback, fallback);
+    }
 }
 
 /// What is wrong with the content of a stats frame.
@@ -302,7 +333,7 @@ impl IslandStats {
 }
 
 impl SolverStats {
-    /// Frame length in bytes: `16 + 152 + 40 · islands`.
+    /// Frame length in bytes: `16 + 160 + 40 · islands`.
     pub fn encoded_len(&self) -> usize {
         HEADER_LEN + STATS_FIXED_LEN + ISLAND_RECORD_LEN * self.islands.len()
     }
@@ -350,6 +381,10 @@ impl SolverStats {
         buf.extend_from_slice(&self.inputs.deadman_trips.to_le_bytes());
         buf.extend_from_slice(&[u8::from(self.inputs.deadman_active), u8::from(self.unstable)]);
         buf.extend_from_slice(&self.unstable_steps.to_le_bytes());
+        let d = &self.degraded;
+        for v in [d.capped, d.inexact, d.budget, d.fallback] {
+            buf.extend_from_slice(&v.to_le_bytes());
+        }
         for i in &self.islands {
             i.write(buf);
         }
@@ -380,16 +415,22 @@ impl SolverStats {
         if p.len() != expected {
             return Err(FrameError::PayloadLength { kind, expected, found: p.len() }.into());
         }
-        let deadman = p[148];
+        let deadman = p[156];
         if deadman > 1 {
             return Err(DecodeError::Invalid(StatsError::DeadmanFlag { value: deadman }));
         }
-        let unstable = p[149];
+        let unstable = p[157];
         if unstable > 1 {
             return Err(DecodeError::Invalid(StatsError::UnstableFlag { value: unstable }));
         }
         self.unstable = unstable == 1;
-        self.unstable_steps = u16::from_le_bytes([p[150], p[151]]);
+        self.unstable_steps = u16::from_le_bytes([p[158], p[159]]);
+        self.degraded = DegradedSolves {
+            capped: le::u32_at(p, 160),
+            inexact: le::u32_at(p, 164),
+            budget: le::u32_at(p, 168),
+            fallback: le::u32_at(p, 172),
+        };
         self.sequence = le::u64_at(p, 0);
         self.sim_time = le::f64_at(p, 8);
         self.step_wall_us = le::f64_at(p, 16);
@@ -406,7 +447,7 @@ impl SolverStats {
         self.inputs = InputHealth {
             accepted: le::u64_at(p, 72),
             rejected: std::array::from_fn(|i| le::u64_at(p, 80 + 8 * i)),
-            deadman_trips: le::u32_at(p, 144),
+            deadman_trips: le::u32_at(p, 152),
             deadman_active: deadman == 1,
         };
         self.validate_fixed().map_err(DecodeError::Invalid)?;
@@ -452,7 +493,6 @@ mod tests {
             totals: StepTotals::from_islands(&islands),
             inputs: InputHealth::default(),
             islands,
-            ..Default::default()
         };
         s.inputs.reject(RejectReason::Stale);
         s.inputs.deadman_active = true;
@@ -467,12 +507,19 @@ mod tests {
     }
 
     #[test]
-    fn watchdog_fields_round_trip_and_bad_flag_is_refused() {
-        let s = SolverStats { unstable: true, unstable_steps: 65_535, ..Default::default() };
+    fn watchdog_and_degraded_counts_round_trip_and_a_bad_flag_is_refused() {
+        let mut degraded = DegradedSolves::default();
+        degraded.count(SolveStatus::MaxSteps, true);
+        degraded.count(SolveStatus::Budget, false);
+        degraded.count(SolveStatus::Inexact, true);
+        degraded.count(SolveStatus::Converged, false);
+        assert_eq!(degraded, DegradedSolves { capped: 1, inexact: 1, budget: 1, fallback: 2 });
+        let s = SolverStats { unstable: true, unstable_steps: 65_535, degraded, ..Default::default() };
         let mut b = Vec::new();
         s.encode(&mut b).unwrap();
+        assert_eq!(b.len(), HEADER_LEN + STATS_FIXED_LEN);
         assert_eq!(SolverStats::decode(&b).unwrap(), s);
-        b[HEADER_LEN + 149] = 2;
+        b[HEADER_LEN + 157] = 2;
         assert_eq!(SolverStats::decode(&b), Err(DecodeError::Invalid(StatsError::UnstableFlag { value: 2 })));
     }
 
@@ -501,7 +548,7 @@ mod tests {
         b[rec + 3] = 1;
         assert_eq!(SolverStats::decode(&b), Err(FrameError::ReservedNonZero { offset: rec + 3 }.into()));
         let mut b = buf.clone();
-        b[HEADER_LEN + 148] = 2;
+        b[HEADER_LEN + 156] = 2;
         assert!(matches!(
             SolverStats::decode(&b),
             Err(DecodeError::Invalid(StatsError::DeadmanFlag { value: 2 }))

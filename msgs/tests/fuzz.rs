@@ -122,7 +122,7 @@ fn random_payloads_under_valid_headers_never_panic() {
             0 => rng.below(64),
             1 => rng.below(400),
             2 => 32 + 112 * rng.below(4),
-            _ => 152 + 40 * rng.below(4),
+            _ => 176 + 40 * rng.below(4),
         };
         let mut b = Vec::with_capacity(HEADER_LEN + len);
         b.extend_from_slice(&MAGIC);

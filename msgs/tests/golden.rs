@@ -135,7 +135,7 @@ fn readme_sizes_match_the_constants() {
         assert_eq!(max(&format!("0x{:04x}", k.code())), k.max_payload_len(), "{k}");
     }
     assert_eq!(HEADER_LEN + POSE_FIXED_LEN, 48);
-    assert_eq!(HEADER_LEN + STATS_FIXED_LEN, 168);
+    assert_eq!(HEADER_LEN + STATS_FIXED_LEN, 192);
     assert_eq!(HEADER_LEN + BOOM_FIXED_LEN, 32);
     assert_eq!(HEADER_LEN + JOYSTICK_LEN, 168);
     assert_eq!(HEADER_LEN + WINCH_LEN, 72);

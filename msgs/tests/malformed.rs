@@ -76,7 +76,7 @@ fn bad_magic_version_kind_flags() {
     let mut m = b.clone();
     m[..4].copy_from_slice(b"PVSX");
     assert_eq!(frame_err(&m), FrameError::BadMagic { found: *b"PVSX" });
-    for version in [0u16, 2, 0xFFFF] {
+    for version in [0u16, 1, 3, 0xFFFF] {
         let mut v = b.clone();
         v[4..6].copy_from_slice(&version.to_le_bytes());
         assert_eq!(frame_err(&v), FrameError::UnsupportedVersion { found: version });
@@ -331,7 +331,7 @@ fn input_value_and_count_errors() {
 fn json_frame(kind: Kind, json: &str) -> Vec<u8> {
     let mut b = Vec::new();
     b.extend_from_slice(b"PVSM");
-    b.extend_from_slice(&1u16.to_le_bytes());
+    b.extend_from_slice(&FORMAT_VERSION.to_le_bytes());
     b.extend_from_slice(&kind.code().to_le_bytes());
     b.extend_from_slice(&(json.len() as u32).to_le_bytes());
     b.extend_from_slice(&0u32.to_le_bytes());

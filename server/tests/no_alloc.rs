@@ -16,11 +16,11 @@ fn second_solve_allocates_nothing() {
     let friction = common::random_problem(60, 7, true, 0.1, 1.0);
     // Paper-like islands exercise the projected-Newton safeguard and the coupled Newton update;
     // Confeti (semidefinite) the proximal mode.
-    let shared = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../shared/data");
+    let data = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/data");
     let extreme =
-        pivotsim_server::solver::io::read_mlcp_file(&shared.join("mlcp-scene/scene-extreme200.txt")).unwrap();
+        pivotsim_server::solver::io::read_mlcp_file(&data.join("scene-shaped/scene-extreme200.txt")).unwrap();
     let confeti =
-        pivotsim_server::solver::io::read_mlcp_file(&shared.join("mlcp/Confeti-ex13-Fc3D-SBM.txt")).unwrap();
+        pivotsim_server::solver::io::read_mlcp_file(&data.join("siconos/Confeti-ex13-Fc3D-SBM.txt")).unwrap();
     for p in [&plain, &friction, &extreme, &confeti] {
         for v in Variant::ALL {
             let mut s = Solver::new(SolverOptions { variant: v, max_steps: 1000, ..Default::default() });

@@ -151,16 +151,25 @@ fn bad_inputs_are_rejected_counted_by_reason_and_change_nothing() {
         actuator: name("boom"),
         drum_speed: 0.5,
     }));
+    // The boom is a position actuator: a velocity command to it is in the wrong mode.
+    let wrong_mode = frame(msgs::InputCommand::Actuator(msgs::ActuatorCommand {
+        sequence: 18,
+        source_id: 7,
+        mode: msgs::ActuatorMode::Velocity,
+        actuator: name("boom"),
+        value: 0.1,
+    }));
     let stale = winch(10, -1.0);
     // A winch frame on the joystick key.
     let wrong_key = winch(17, -1.0);
-    let cases: [(&[u8], Option<msgs::Topic>, msgs::RejectReason); 8] = [
+    let cases: [(&[u8], Option<msgs::Topic>, msgs::RejectReason); 9] = [
         (&nan, Some(msgs::Topic::Winch), msgs::RejectReason::NonFinite),
         (&truncated, Some(msgs::Topic::Winch), msgs::RejectReason::Malformed),
         (&oversized, Some(msgs::Topic::Winch), msgs::RejectReason::Oversize),
         (&version, Some(msgs::Topic::Winch), msgs::RejectReason::Version),
         (&unknown, Some(msgs::Topic::Winch), msgs::RejectReason::UnknownActuator),
         (&wrong_kind, Some(msgs::Topic::Winch), msgs::RejectReason::UnknownActuator),
+        (&wrong_mode, Some(msgs::Topic::Actuator), msgs::RejectReason::WrongMode),
         (&stale, Some(msgs::Topic::Winch), msgs::RejectReason::Stale),
         (&wrong_key, Some(msgs::Topic::Joystick), msgs::RejectReason::Version),
     ];
@@ -182,6 +191,7 @@ fn bad_inputs_are_rejected_counted_by_reason_and_change_nothing() {
         (msgs::RejectReason::Oversize, 12),
         (msgs::RejectReason::Version, 24),
         (msgs::RejectReason::UnknownActuator, 24),
+        (msgs::RejectReason::WrongMode, 12),
         (msgs::RejectReason::Stale, 12),
     ] {
         assert_eq!(h.rejected_for(reason), n, "{reason}");

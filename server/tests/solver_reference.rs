@@ -229,7 +229,7 @@ fn a_new_problem_with_the_same_pattern_reuses_the_ordering_and_solves_correctly(
 fn generated_contact_islands_converge_with_every_exact_variant() {
     // Chains of bodies with ball joints and frictional ground contacts (the bench's generator),
     // including the ones whose outer friction iteration cycles between two index sets.
-    use pivotsim_server::bench::contact_like;
+    use pivotsim_server::solver::generate::contact_like;
     for (m, seed, ratio) in [(200, 3, 6_300.0), (430, 5, 6_300.0), (430, 7, 20_000.0), (430, 8, 6_300.0)] {
         let p = contact_like(m, seed, ratio);
         assert!(p.has_friction());

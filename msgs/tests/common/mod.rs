@@ -100,7 +100,7 @@ pub fn solver_stats() -> impl Strategy<Value = SolverStats> {
         non_negative(),
         any::<u32>(),
         prop::collection::vec(island(), 0..12),
-        any::<(u64, [u64; 8], u32, bool)>(),
+        any::<(u64, [u64; REJECT_REASONS], u32, bool)>(),
         any::<bool>(),
     )
         .prop_map(|(sequence, sim_time, step_wall_us, overruns, islands, inputs, sum)| {

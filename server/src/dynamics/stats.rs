@@ -19,10 +19,10 @@ pub struct IslandStats {
     pub variant: Variant,
     /// How the solve ended.
     pub status: SolveStatus,
+    /// Whether a fallback (projected Newton, Murty, semismooth Newton) ran ([`SolveStats::fallback`](crate::solver::SolveStats::fallback)).
+    pub fallback: bool,
     /// Pivot steps (exact variants).
     pub pivot_steps: usize,
-    /// A safeguard of the pivoting ran (projected Newton, Murty, semismooth Newton).
-    pub fallback: bool,
     /// Sweeps (PGS).
     pub iterations: usize,
     /// Tight rows in the solution.

@@ -57,6 +57,8 @@ pub struct Engine {
     generation: u64,
     watchdog: Watchdog,
     unstable: bool,
+    /// Degraded island solves since the scene was (re)loaded (published every step).
+    degraded: msgs::DegradedSolves,
 }
 
 impl Engine {
@@ -92,6 +94,7 @@ impl Engine {
             generation: 0,
             watchdog,
             unstable: false,
+            degraded: msgs::DegradedSolves::default(),
         };
         e.scene_changed();
         e.encode_frames(0);
@@ -113,6 +116,7 @@ impl Engine {
         self.failure = None;
         self.watchdog = Watchdog::new(&self.scene.world, self.scene.watchdog);
         self.unstable = false;
+        self.degraded = msgs::DegradedSolves::default();
     }
 
     /// Changes whenever the scene (and so its description) is replaced or reset.
@@ -182,8 +186,7 @@ impl Engine {
             paused: self.paused,
             sequence: self.sequence,
             sim_time: self.scene.world.time(),
-            variant: msgs::SolverVariant::from_name(self.scene.world.settings().solver.variant.name())
-                .unwrap_or_default(),
+            variant: self.scene.world.settings().solver.variant.into(),
         }
     }
 
@@ -279,7 +282,7 @@ impl Engine {
                 let i = self.actuator(c.actuator.as_str())?;
                 let a = &controls.actuators()[i];
                 if actuator_mode(a.kind()) != c.mode {
-                    return Err(unknown);
+                    return Err(msgs::RejectReason::WrongMode);
                 }
                 let v = match a.kind() {
                     ActuatorKind::Brake | ActuatorKind::Clutch if a.max_force() > 0.0 => {
@@ -309,7 +312,7 @@ impl Engine {
     /// Decodes a control request, carries it out and returns the encoded reply.
     pub fn handle_control(&mut self, bytes: &[u8]) -> Vec<u8> {
         let reply = match msgs::ControlRequest::decode(bytes) {
-            Err(e) => msgs::ControlReply::error(0, msgs::ControlErrorCode::InvalidRequest, e.to_string()),
+            Err(e) => msgs::ControlRequest::rejection(bytes, &e),
             Ok(req) => match self.control(&req.command) {
                 Ok(()) => msgs::ControlReply::ok(req.id, self.status()),
                 Err((code, msg)) => msgs::ControlReply::error(req.id, code, msg),
@@ -344,14 +347,14 @@ impl Engine {
                         break;
                     }
                 }
-                self.encode_frames(wall_ns());
+                self.encode_frames(pivotsim_link::wall_ns());
             }
             C::Reset => {
                 let scene_ref = self.scene_ref.clone();
                 self.load(&scene_ref)?;
             }
             C::SetVariant { variant } => {
-                let v: Variant = variant.name().parse().map_err(|e| (E::UnknownVariant, format!("{e}")))?;
+                let v = Variant::from(*variant);
                 let mut s = *self.scene.world.settings();
                 s.solver.variant = v;
                 self.scene.world.set_settings(s).map_err(|e| (E::Internal, e.to_string()))?;
@@ -377,7 +380,7 @@ impl Engine {
         self.scene_ref = scene_ref.to_string();
         self.paused = true;
         self.scene_changed();
-        self.encode_frames(wall_ns());
+        self.encode_frames(pivotsim_link::wall_ns());
         Ok(())
     }
 
@@ -398,7 +401,7 @@ impl Engine {
             return false;
         }
         let stepped = self.step_once();
-        self.encode_frames(wall_ns());
+        self.encode_frames(pivotsim_link::wall_ns());
         stepped
     }
 
@@ -416,6 +419,9 @@ impl Engine {
         match r {
             Ok(()) => {
                 self.sequence += 1;
+                for s in self.scene.world.island_stats() {
+                    self.degraded.count(s.status.into(), s.fallback);
+                }
                 let found = self.watchdog.check(&self.scene.world);
                 self.unstable = found.is_some();
                 if let Some(i) = found
@@ -469,29 +475,14 @@ impl Engine {
         st.inputs = self.health;
         st.unstable = self.unstable;
         st.unstable_steps = self.watchdog.count().min(u64::from(u16::MAX)) as u16;
+        st.degraded = self.degraded;
         st.islands.clear();
         for s in w.island_stats() {
-            st.islands.push(msgs::IslandStats {
-                variant: msgs::SolverVariant::from_name(s.variant.name()).unwrap_or_default(),
-                status: msgs::SolveStatus::from_name(s.status.name()).unwrap_or(msgs::SolveStatus::Inexact),
-                fallback: false,
-                rows: s.rows as u32,
-                bodies: s.bodies as u32,
-                pivot_steps: s.pivot_steps as u32,
-                tight: s.tight as u32,
-                iterations: s.iterations as u32,
-                solve_us: s.solve_us,
-                residual_rel: if s.residual_rel.is_finite() { s.residual_rel } else { f64::MAX },
-            });
+            st.islands.push(s.into());
         }
         st.totals = msgs::StepTotals::from_islands(&st.islands);
         if let Err(e) = st.encode(&mut self.stats_buf) {
             warn!("stats frame not encodable: {e}");
         }
     }
-}
-
-/// Nanoseconds since the UNIX epoch.
-pub fn wall_ns() -> u64 {
-    std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).map_or(0, |d| d.as_nanos() as u64)
 }

@@ -16,6 +16,7 @@
 use iceoryx2::port::publisher::Publisher;
 use iceoryx2::port::subscriber::Subscriber;
 use iceoryx2::prelude::*;
+use pivotsim_link::iox as link;
 use pivotsim_msgs as msgs;
 use tracing::{info, warn};
 
@@ -23,18 +24,11 @@ use super::{ErrorThrottle, Inbound, InboxSender, ServeError, Transport};
 
 /// Bytes a published frame may take before the publisher reallocates (a pose frame of 500 bodies).
 pub const INITIAL_FRAME_BYTES: usize = 64 * 1024;
-/// Samples a subscriber of the server's services buffers.
-pub const SUBSCRIBER_BUFFER: usize = 16;
 /// Inputs drained per loop iteration.
 const MAX_INPUTS_PER_POLL: usize = 256;
 
-fn err(e: impl std::fmt::Debug) -> ServeError {
-    ServeError::Transport { transport: "iceoryx2", message: format!("{e:?}") }
-}
-
-/// The iceoryx2 service name of a world's topic (`cmd` for every input).
-pub fn service_name(world: &msgs::WorldName, what: &str) -> String {
-    format!("{}/{}/{}", msgs::KEY_PREFIX, world.as_str(), what)
+fn err(e: impl std::fmt::Display) -> ServeError {
+    ServeError::Transport { transport: "iceoryx2", message: e.to_string() }
 }
 
 /// Removes the shared-memory resources of dead nodes; returns how many nodes were cleaned.
@@ -55,7 +49,7 @@ pub fn clean_dead_nodes() -> usize {
     cleaned
 }
 
-type Service = iceoryx2::service::port_factory::publish_subscribe::PortFactory<ipc::Service, [u8], ()>;
+type Service = link::ByteService;
 
 /// The server's iceoryx2 side.
 pub struct IoxTransport {
@@ -66,6 +60,7 @@ pub struct IoxTransport {
     _stats_service: Service,
     _cmd_service: Service,
     throttle: ErrorThrottle,
+    prefix: String,
     // Declared last: dropped after the ports and services.
     _node: Node<ipc::Service>,
 }
@@ -73,24 +68,6 @@ pub struct IoxTransport {
 impl std::fmt::Debug for IoxTransport {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.write_str("IoxTransport")
-    }
-}
-
-fn open_service(node: &Node<ipc::Service>, name: &str) -> Result<Service, ServeError> {
-    let name: ServiceName = name.try_into().map_err(err)?;
-    let created = node
-        .service_builder(&name)
-        .publish_subscribe::<[u8]>()
-        .enable_safe_overflow(true)
-        .subscriber_max_buffer_size(SUBSCRIBER_BUFFER)
-        .open_or_create();
-    match created {
-        Ok(s) => Ok(s),
-        // A client created the service first with other settings: use it as it is.
-        Err(e) => {
-            warn!("iceoryx2: {name}: {e:?}; opening the existing service with its own settings");
-            node.service_builder(&name).publish_subscribe::<[u8]>().open().map_err(err)
-        }
     }
 }
 
@@ -103,25 +80,36 @@ impl IoxTransport {
         if cleaned > 0 {
             info!("iceoryx2: removed the resources of {cleaned} dead node(s)");
         }
-        let node = NodeBuilder::new()
-            .name(&"pivotsim-server".try_into().map_err(err)?)
-            .signal_handling_mode(SignalHandlingMode::Disabled)
-            .create::<ipc::Service>()
-            .map_err(err)?;
-        let poses_service = open_service(&node, &service_name(world, "poses"))?;
-        let stats_service = open_service(&node, &service_name(world, "stats"))?;
-        let cmd_service = open_service(&node, &service_name(world, "cmd"))?;
+        let node = link::node("pivotsim-server").map_err(err)?;
+        let open = |t: msgs::Topic| link::open_service(&node, &link::service_name(world, t)?);
+        let poses_service = open(msgs::Topic::Poses).map_err(err)?;
+        let stats_service = open(msgs::Topic::Stats).map_err(err)?;
+        let cmd_service = open(msgs::Topic::Joystick).map_err(err)?;
         let publisher = |s: &Service| {
             s.publisher_builder()
                 .initial_max_slice_len(INITIAL_FRAME_BYTES)
                 .allocation_strategy(AllocationStrategy::PowerOfTwo)
                 .backpressure_strategy(BackpressureStrategy::DiscardData)
                 .create()
-                .map_err(err)
+                .map_err(|e| err(format!("{e:?}")))
         };
         let poses = publisher(&poses_service)?;
+        // Another live server of this world on this host publishes here too: refuse, rather than
+        // interleave two streams under one name (dead servers' ports were cleaned above).
+        let publishers = poses_service.dynamic_config().number_of_publishers();
+        if publishers > 1 {
+            return Err(ServeError::WorldTaken {
+                world: world.as_str().to_string(),
+                transport: "iceoryx2",
+                detail: format!(
+                    "{} already has {} publisher(s) on this host",
+                    poses_service.name(),
+                    publishers - 1
+                ),
+            });
+        }
         let stats = publisher(&stats_service)?;
-        let inputs = cmd_service.subscriber_builder().create().map_err(err)?;
+        let inputs = cmd_service.subscriber_builder().create().map_err(|e| err(format!("{e:?}")))?;
         Ok(IoxTransport {
             poses,
             stats,
@@ -130,6 +118,7 @@ impl IoxTransport {
             _stats_service: stats_service,
             _cmd_service: cmd_service,
             throttle: ErrorThrottle::default(),
+            prefix: format!("{}/{}", msgs::KEY_PREFIX, world.as_str()),
             _node: node,
         })
     }
@@ -168,5 +157,9 @@ impl Transport for IoxTransport {
 
     fn status(&mut self) -> String {
         format!("iceoryx2: {} subscriber(s)", self.poses_service.dynamic_config().number_of_subscribers())
+    }
+
+    fn describe(&self) -> String {
+        format!("iceoryx2 (same host, shared memory): services {}/{{poses, stats, cmd}}", self.prefix)
     }
 }

@@ -7,6 +7,7 @@
 //! | `engine.rs` | transport-free state machine: inputs, deadman, control, frames |
 //! | `describe.rs` | the scene description for renderers and consoles |
 //! | `zenoh_io.rs` | Zenoh: publishers, the `cmd/**` subscriber, the `scene` and `control` queryables |
+//! | `wire.rs` | exhaustive conversions of solver variants, statuses and island stats to `msgs` |
 //! | `iox.rs` | iceoryx2: the same frames over shared memory for same-host subscribers, and inputs |
 //!
 //! **The loop.** One thread owns the engine. Transports hand inputs and control requests to it
@@ -24,14 +25,14 @@ pub mod describe;
 pub mod engine;
 #[cfg(feature = "iceoryx2")]
 pub mod iox;
+pub mod wire;
 #[cfg(feature = "zenoh")]
 pub mod zenoh_io;
 
 use std::io::IsTerminal;
 use std::path::PathBuf;
 use std::sync::Arc;
-use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
-use std::sync::mpsc::{Receiver, SyncSender, TrySendError, sync_channel};
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
 use pivotsim_msgs as msgs;
@@ -45,6 +46,15 @@ pub const MAX_CATCH_UP: u32 = 4;
 
 /// Inbox capacity (inputs and control requests waiting for the loop).
 pub const INBOX_CAPACITY: usize = 1024;
+
+/// Longest deadman timeout accepted (one hour), in ms; the shortest is 1 ms.
+pub const MAX_DEADMAN_MS: u64 = 3_600_000;
+
+/// Longest step period `h / rtf` accepted (a minute): a smaller real-time factor is refused.
+pub const MAX_STEP_PERIOD: Duration = Duration::from_secs(60);
+
+/// Longest single sleep of the loop: Ctrl-C is seen within this even at a slow pace.
+const MAX_SLEEP: Duration = Duration::from_millis(100);
 
 /// Zenoh settings of the server.
 #[derive(Debug, Clone)]
@@ -77,9 +87,10 @@ pub struct ServeConfig {
     pub scene: String,
     /// World name: the `<world>` of every key and service.
     pub world: String,
-    /// Simulated seconds per wall second; `None`: as fast as possible.
+    /// Simulated seconds per wall second; `None`: as fast as possible. A finite number `> 0`
+    /// whose step period `h / rtf` is at most [`MAX_STEP_PERIOD`].
     pub realtime_factor: Option<f64>,
-    /// Deadman timeout.
+    /// Deadman timeout, from 1 ms to [`MAX_DEADMAN_MS`].
     pub deadman: Duration,
     /// Zenoh (`None`: off).
     pub zenoh: Option<ZenohOptions>,
@@ -129,6 +140,18 @@ pub enum ServeError {
         /// What failed.
         message: String,
     },
+    /// Another server already serves this world name: two would interleave their streams.
+    #[error(
+        "world `{world}` is already served ({transport}: {detail}); stop that server or start this one with another --world"
+    )]
+    WorldTaken {
+        /// The world name.
+        world: String,
+        /// Where the other server was seen: `zenoh` or `iceoryx2`.
+        transport: &'static str,
+        /// What was seen.
+        detail: String,
+    },
     /// The transport is not compiled in.
     #[error("{0} support is not compiled in (cargo feature `{0}`)")]
     NotCompiled(&'static str),
@@ -161,38 +184,34 @@ impl std::fmt::Debug for Inbound {
     }
 }
 
-/// The transports' side of the inbox: never blocks; drops are counted.
+/// The transports' side of the inbox (`pivotsim_link::inbox`): never blocks; drops are counted,
+/// and a dropped control request is answered `busy` at once.
 #[derive(Debug, Clone)]
-pub struct InboxSender {
-    tx: SyncSender<Inbound>,
-    dropped: Arc<AtomicU64>,
-}
+pub struct InboxSender(pivotsim_link::InboxSender<Inbound>);
 
 impl InboxSender {
     /// Offers an item; `false` (and a counted drop) when the inbox is full or closed.
     pub fn offer(&self, item: Inbound) -> bool {
-        match self.tx.try_send(item) {
+        match self.0.offer(item) {
             Ok(()) => true,
-            Err(TrySendError::Full(item) | TrySendError::Disconnected(item)) => {
-                self.dropped.fetch_add(1, Ordering::Relaxed);
-                if let Inbound::Control { reply, .. } = item {
-                    let r = msgs::ControlReply::error(0, msgs::ControlErrorCode::Busy, "server inbox full");
-                    let mut buf = Vec::new();
-                    if r.encode(&mut buf).is_ok() {
-                        reply(buf);
-                    }
+            Err(Inbound::Control { bytes, reply }) => {
+                let id = msgs::ControlRequest::peek_id(&bytes).unwrap_or(0);
+                let r = msgs::ControlReply::error(id, msgs::ControlErrorCode::Busy, "server inbox full");
+                let mut buf = Vec::new();
+                if r.encode(&mut buf).is_ok() {
+                    reply(buf);
                 }
                 false
             }
+            Err(Inbound::Input { .. }) => false,
         }
     }
 }
 
-/// A bounded inbox: the sender for transports, the receiver for the loop.
-pub fn inbox() -> (InboxSender, Receiver<Inbound>, Arc<AtomicU64>) {
-    let (tx, rx) = sync_channel(INBOX_CAPACITY);
-    let dropped = Arc::new(AtomicU64::new(0));
-    (InboxSender { tx, dropped: dropped.clone() }, rx, dropped)
+/// A bounded inbox of [`INBOX_CAPACITY`]: the sender for transports, the receiver for the loop.
+pub fn inbox() -> (InboxSender, pivotsim_link::Inbox<Inbound>) {
+    let (tx, rx) = pivotsim_link::inbox(INBOX_CAPACITY);
+    (InboxSender(tx), rx)
 }
 
 /// A transport as the loop sees it.
@@ -205,6 +224,27 @@ pub trait Transport {
     fn set_description(&mut self, _bytes: &[u8]) {}
     /// A short status for the status line.
     fn status(&mut self) -> String;
+    /// One line for the start message: the transport, where it listens, its keys or services.
+    fn describe(&self) -> String;
+}
+
+/// What the server announces once its transports are up (the CLI prints it as the start message).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Started {
+    /// Scene name.
+    pub scene: String,
+    /// Bodies in the scene.
+    pub bodies: usize,
+    /// Step `h` (s).
+    pub timestep: f64,
+    /// The pace: `real time`, `real-time factor X` or `as fast as possible`.
+    pub pace: String,
+    /// World name.
+    pub world: String,
+    /// One line per transport that is up ([`Transport::describe`]).
+    pub transports: Vec<String>,
+    /// The Zenoh endpoint a client on this host connects to (`None`: Zenoh is off).
+    pub zenoh_connect_hint: Option<String>,
 }
 
 /// What the server did, when it stops.
@@ -225,13 +265,23 @@ pub struct ServeReport {
 /// Runs the server until `shutdown` is set (or `max_steps`); the in-process entry point that
 /// tests and the CLI share.
 pub fn run(config: &ServeConfig, shutdown: Arc<AtomicBool>) -> Result<ServeReport, ServeError> {
+    run_with(config, shutdown, |_| {})
+}
+
+/// [`run`], calling `on_start` once every transport is up and before the first step.
+pub fn run_with(
+    config: &ServeConfig,
+    shutdown: Arc<AtomicBool>,
+    on_start: impl FnOnce(&Started),
+) -> Result<ServeReport, ServeError> {
     let world = msgs::WorldName::new(config.world.clone())?;
+    check_deadman(config.deadman)?;
     let mut engine = Engine::new(&config.scene, world.clone(), config.deadman)?;
     engine.set_paused(config.start_paused);
-    if let Some(r) = config.realtime_factor.filter(|r| !(r.is_finite() && *r > 0.0)) {
-        return Err(ServeError::Option(format!("real-time factor {r} must be a finite number > 0")));
+    if let Some(r) = config.realtime_factor {
+        step_period(engine.scene().world.settings().timestep, r)?;
     }
-    let (tx, rx, dropped) = inbox();
+    let (tx, rx) = inbox();
     let mut transports: Vec<Box<dyn Transport>> = Vec::new();
     // iceoryx2 first: once Zenoh answers, every service exists.
     if config.iceoryx2 {
@@ -254,18 +304,29 @@ pub fn run(config: &ServeConfig, shutdown: Arc<AtomicBool>) -> Result<ServeRepor
             return Err(ServeError::NotCompiled("zenoh"));
         }
     }
-    info!(
-        "serving scene `{}` as world `{}` (h = {:.4} s, {}), {} transport(s)",
-        engine.scene().name,
-        world.as_str(),
-        engine.scene().world.settings().timestep,
-        match config.realtime_factor {
+    let started = Started {
+        scene: engine.scene().name.clone(),
+        bodies: engine.scene().world.bodies().len(),
+        timestep: engine.scene().world.settings().timestep,
+        pace: match config.realtime_factor {
+            Some(r) if r == 1.0 => "real time".into(),
             Some(r) => format!("real-time factor {r}"),
             None => "as fast as possible".into(),
         },
+        world: world.as_str().to_string(),
+        transports: transports.iter().map(|t| t.describe()).collect(),
+        zenoh_connect_hint: config.zenoh.as_ref().map(|z| z.listen.first().cloned().unwrap_or_default()),
+    };
+    info!(
+        "serving scene `{}` as world `{}` (h = {:.4} s, {}), {} transport(s)",
+        started.scene,
+        started.world,
+        started.timestep,
+        started.pace,
         transports.len()
     );
-    let report = serve_loop(config, &mut engine, &mut transports, &tx, &rx, &dropped, &shutdown);
+    on_start(&started);
+    let report = serve_loop(config, &mut engine, &mut transports, &tx, &rx, &shutdown);
     info!("server stopped after {} steps ({} overruns)", report.steps, report.overruns);
     Ok(report)
 }
@@ -275,8 +336,7 @@ fn serve_loop(
     engine: &mut Engine,
     transports: &mut [Box<dyn Transport>],
     tx: &InboxSender,
-    rx: &Receiver<Inbound>,
-    dropped: &AtomicU64,
+    rx: &pivotsim_link::Inbox<Inbound>,
     shutdown: &AtomicBool,
 ) -> ServeReport {
     let start = Instant::now();
@@ -298,7 +358,7 @@ fn serve_loop(
         }
         let mut described = false;
         let mut republish = false;
-        while let Ok(item) = rx.try_recv() {
+        while let Some(item) = rx.try_recv() {
             match item {
                 Inbound::Input { topic, bytes } => {
                     let _ = engine.handle_input(topic, &bytes, Instant::now());
@@ -311,7 +371,7 @@ fn serve_loop(
                 }
             }
         }
-        let d = dropped.load(Ordering::Relaxed);
+        let d = rx.dropped();
         while counted_drops < d {
             engine.count_dropped();
             counted_drops += 1;
@@ -326,7 +386,7 @@ fn serve_loop(
         // keep seeing the world and the input counters.
         if stepped || republish || engine.is_paused() {
             if !stepped {
-                engine.encode_frames(engine::wall_ns());
+                engine.encode_frames(pivotsim_link::wall_ns());
             }
             for t in transports.iter_mut() {
                 t.publish(engine.pose_frame(), engine.stats_frame());
@@ -359,9 +419,13 @@ fn serve_loop(
             }
             (last_status, status_steps, status_sim, status_solve_us) = (Instant::now(), 0, sim, 0.0);
         }
-        // Pacing.
+        // Pacing (none after the last step of a bounded run).
+        if config.max_steps.is_some_and(|m| steps >= m) {
+            break;
+        }
         let Some(rtf) = config.realtime_factor else { continue };
-        let period = Duration::from_secs_f64(engine.scene().world.settings().timestep / rtf);
+        // A scene loaded later may have another h: its period is held to the same bound.
+        let period = step_period(engine.scene().world.settings().timestep, rtf).unwrap_or(MAX_STEP_PERIOD);
         next += period;
         let now = Instant::now();
         if now > next {
@@ -373,7 +437,7 @@ fn serve_loop(
                 next = now;
             }
         } else {
-            std::thread::sleep(next - now);
+            sleep_until(next, shutdown);
         }
     }
     ServeReport {
@@ -382,6 +446,43 @@ fn serve_loop(
         wall_s: start.elapsed().as_secs_f64(),
         sim_time: engine.scene().world.time(),
         inputs: *engine.health(),
+    }
+}
+
+/// The step period `h / rtf`, or why the real-time factor is refused.
+pub fn step_period(timestep: f64, rtf: f64) -> Result<Duration, ServeError> {
+    if !(rtf.is_finite() && rtf > 0.0) {
+        return Err(ServeError::Option(format!("real-time factor {rtf} must be a finite number > 0")));
+    }
+    match Duration::try_from_secs_f64(timestep / rtf) {
+        Ok(p) if p <= MAX_STEP_PERIOD => Ok(p),
+        _ => Err(ServeError::Option(format!(
+            "real-time factor {rtf} gives a step period of {:.3e} s (h = {timestep} s); at most {} s: \
+             use a real-time factor of at least {:.3e}",
+            timestep / rtf,
+            MAX_STEP_PERIOD.as_secs(),
+            timestep / MAX_STEP_PERIOD.as_secs_f64()
+        ))),
+    }
+}
+
+fn check_deadman(deadman: Duration) -> Result<(), ServeError> {
+    if deadman.is_zero() || deadman > Duration::from_millis(MAX_DEADMAN_MS) {
+        return Err(ServeError::Option(format!(
+            "deadman timeout {deadman:?} must be from 1 ms to {MAX_DEADMAN_MS} ms (every input would trip a zero one)"
+        )));
+    }
+    Ok(())
+}
+
+/// Sleeps until `deadline` in slices of at most [`MAX_SLEEP`], returning early on shutdown.
+fn sleep_until(deadline: Instant, shutdown: &AtomicBool) {
+    for _ in 0..=(MAX_STEP_PERIOD.as_millis() / MAX_SLEEP.as_millis()) {
+        let now = Instant::now();
+        if now >= deadline || shutdown.load(Ordering::Relaxed) {
+            return;
+        }
+        std::thread::sleep((deadline - now).min(MAX_SLEEP));
     }
 }
 

@@ -5,9 +5,11 @@
 //! description) and `…/control` (requests answered by the loop thread).
 
 use std::sync::{Arc, RwLock};
+use std::time::Duration;
 
 use pivotsim_msgs as msgs;
 use zenoh::Wait;
+use zenoh::liveliness::LivelinessToken;
 use zenoh::pubsub::{Publisher, Subscriber};
 use zenoh::qos::CongestionControl;
 use zenoh::query::Queryable;
@@ -18,28 +20,44 @@ fn err(e: impl std::fmt::Display) -> ServeError {
     ServeError::Transport { transport: "zenoh", message: e.to_string() }
 }
 
-/// A Zenoh configuration from the options: peer mode on the given endpoints (module doc).
+/// The Zenoh configuration of the options (`pivotsim_link::zenoh_config`: a peer on the given
+/// endpoints, multicast scouting off unless asked, or the configuration file).
 pub fn config(opts: &ZenohOptions) -> Result<zenoh::Config, ServeError> {
-    let mut c = match &opts.config_file {
-        Some(p) => zenoh::Config::from_file(p).map_err(err)?,
-        None => {
-            let mut c = zenoh::Config::default();
-            c.insert_json5("mode", "\"peer\"").map_err(err)?;
-            c
+    pivotsim_link::zenoh_config::ZenohEndpoints {
+        listen: opts.listen.clone(),
+        connect: opts.connect.clone(),
+        config_file: opts.config_file.clone(),
+        multicast_scouting: opts.multicast_scouting,
+    }
+    .config()
+    .map_err(err)
+}
+
+/// How long a starting server asks whether another one already holds its world's token.
+pub const CLAIM_TIMEOUT: Duration = Duration::from_millis(500);
+
+/// Refuses `world` when another server reachable from `session` holds its liveliness token
+/// (`pivotsim/<world>/server`); otherwise declares the token, held as long as the session lives.
+fn claim_world(session: &zenoh::Session, world: &msgs::WorldName) -> Result<LivelinessToken, ServeError> {
+    let key = world.server_token();
+    let replies = session.liveliness().get(&key).timeout(CLAIM_TIMEOUT).wait().map_err(err)?;
+    let deadline = std::time::Instant::now() + CLAIM_TIMEOUT + Duration::from_millis(200);
+    while let Some(left) = deadline.checked_duration_since(std::time::Instant::now()) {
+        match replies.recv_timeout(left) {
+            Ok(Some(reply)) => {
+                if let Ok(sample) = reply.result() {
+                    return Err(ServeError::WorldTaken {
+                        world: world.as_str().to_string(),
+                        transport: "zenoh",
+                        detail: format!("a server holds {}", sample.key_expr()),
+                    });
+                }
+            }
+            // Every reply is in (or the query timed out): nobody holds the token.
+            Ok(None) | Err(_) => break,
         }
-    };
-    let json = |v: &[String]| serde_json::to_string(v).expect("strings serialize");
-    if opts.config_file.is_none() || !opts.listen.is_empty() {
-        c.insert_json5("listen/endpoints", &json(&opts.listen)).map_err(err)?;
     }
-    if !opts.connect.is_empty() {
-        c.insert_json5("connect/endpoints", &json(&opts.connect)).map_err(err)?;
-    }
-    if opts.config_file.is_none() || opts.multicast_scouting {
-        let on = if opts.multicast_scouting { "true" } else { "false" };
-        c.insert_json5("scouting/multicast/enabled", on).map_err(err)?;
-    }
-    Ok(c)
+    session.liveliness().declare_token(key).wait().map_err(err)
 }
 
 /// The server's Zenoh side.
@@ -50,8 +68,12 @@ pub struct ZenohTransport {
     _inputs: Subscriber<()>,
     _scene: Queryable<()>,
     _control: Queryable<()>,
+    _token: LivelinessToken,
     description: Arc<RwLock<Vec<u8>>>,
     throttle: ErrorThrottle,
+    listen: Vec<String>,
+    connect: Vec<String>,
+    prefix: String,
 }
 
 impl std::fmt::Debug for ZenohTransport {
@@ -69,6 +91,7 @@ impl ZenohTransport {
         description: &[u8],
     ) -> Result<ZenohTransport, ServeError> {
         let session = zenoh::open(config(opts)?).wait().map_err(err)?;
+        let token = claim_world(&session, world)?;
         let publisher = |topic: msgs::Topic| {
             session
                 .declare_publisher(world.key(topic))
@@ -131,8 +154,12 @@ impl ZenohTransport {
             _inputs: inputs,
             _scene: scene,
             _control: control,
+            _token: token,
             description,
             throttle: ErrorThrottle::default(),
+            listen: opts.listen.clone(),
+            connect: opts.connect.clone(),
+            prefix: format!("{}/{}", msgs::KEY_PREFIX, world.as_str()),
         })
     }
 }
@@ -152,6 +179,18 @@ impl Transport for ZenohTransport {
             d.clear();
             d.extend_from_slice(bytes);
         }
+    }
+
+    fn describe(&self) -> String {
+        let mut d = format!("Zenoh peer {}", self.session.zid());
+        if !self.listen.is_empty() {
+            d.push_str(&format!(" listening on {}", self.listen.join(", ")));
+        }
+        if !self.connect.is_empty() {
+            d.push_str(&format!(" connecting to {}", self.connect.join(", ")));
+        }
+        d.push_str(&format!(": keys {}/{{poses, stats, cmd/*, scene, control}}", self.prefix));
+        d
     }
 
     fn status(&mut self) -> String {

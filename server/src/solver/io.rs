@@ -1,4 +1,4 @@
-//! The boxed-MLCP text format (full description: `MLCP_FORMAT.md` in the shared directory).
+//! The boxed-MLCP text format (full description: `docs/MLCP_FORMAT.md` at the repository root).
 //!
 //! One problem per file, whitespace-separated tokens in any line layout; lines whose first non-blank
 //! character is `#` are comments.
@@ -555,12 +555,12 @@ mod tests {
         line.split_whitespace().map(str::to_owned).collect()
     }
 
-    fn shared_dir(sub: &str) -> PathBuf {
-        Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/../../shared/data")).join(sub)
+    fn data_dir(sub: &str) -> PathBuf {
+        Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data")).join(sub)
     }
 
-    fn check_shared_dir(sub: &str, min_files: usize, sparse_with_friction: bool) {
-        let dir = shared_dir(sub);
+    fn check_data_dir(sub: &str, min_files: usize, sparse_with_friction: bool) {
+        let dir = data_dir(sub);
         let mut paths: Vec<PathBuf> = std::fs::read_dir(&dir)
             .unwrap_or_else(|e| panic!("{}: {e}", dir.display()))
             .map(|e| e.unwrap().path())
@@ -584,13 +584,13 @@ mod tests {
     }
 
     #[test]
-    fn shared_mlcp_files_parse() {
-        check_shared_dir("mlcp", 10, false);
+    fn siconos_files_parse() {
+        check_data_dir("siconos", 10, false);
     }
 
     #[test]
-    fn shared_scene_files_parse_sparse_with_friction() {
-        check_shared_dir("mlcp-scene", 4, true);
+    fn scene_shaped_files_parse_sparse_with_friction() {
+        check_data_dir("scene-shaped", 4, true);
     }
 
     #[test]

@@ -12,11 +12,13 @@
 //! | `envelope.rs` | envelope (skyline) Cholesky, deletion on the skyline, solves (Alg. 3) |
 //! | `bpp/` | block principal pivoting (eq. 4–6): `mod.rs` the driver, `factor.rs` the factor strategies, `safeguard.rs` the active-set and proximal safeguards, `coupled.rs` friction coupling, `safe.rs` safe returned iterates |
 //! | `pgs.rs` | projected Gauss–Seidel baseline |
+//! | `generate.rs` | generated contact-like test problems (tests and `bench-solver`) |
 //! | `reference.rs` | brute-force enumeration of index sets (test reference for small problems) |
 
 mod bpp;
 pub mod dense;
 pub mod envelope;
+pub mod generate;
 pub mod io;
 pub mod ordering;
 pub mod pgs;

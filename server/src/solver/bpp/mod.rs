@@ -45,12 +45,12 @@
 //! away, and the forklift at contact compliance 1e-10 ends with 0.12 m of joint error, not 0.45 m.
 //!
 //! **Friction coupling.** Friction bounds `±μ λ_n` move with the normal impulses; pivoting with
-//! bounds that change at every step cycles (measured on `shared/data/mlcp-scene`). We freeze the
+//! bounds that change at every step cycles (measured on `tests/data/scene-shaped`). We freeze the
 //! bounds at the current normal impulses and solve that boxed LCP exactly; then, with the settled
 //! index set, take the exact coupled Newton point in which tight friction rows follow their free
 //! normal impulse (`coupled.rs`: GMRES preconditioned by the factor at hand), update the bounds
 //! from it and continue from the same index set. This is Newton's method on the outer fixed point
-//! `λ_n ↦ λ_n(bounds(λ_n))`; it needed 1–12 outer updates on every shared problem where the plain
+//! `λ_n ↦ λ_n(bounds(λ_n))`; it needed 1–12 outer updates on every test problem where the plain
 //! fixed point (ODE/Bullet style) stalled. The factor of `A` is computed once and reused by every
 //! step. Every iterate is judged by the natural-map residual against the bounds at its own normal
 //! impulses.

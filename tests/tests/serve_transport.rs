@@ -1,31 +1,22 @@
-//! The server over its real transports on loopback (in-process server on an ephemeral port and a
-//! unique world name per test; a separate process for the SIGKILL restart): poses arrive at the
-//! step rate with increasing sequence and the same bytes on Zenoh and iceoryx2; a winch command
-//! over either transport turns the drum; the deadman releases when the sender stops; malformed
-//! inputs are counted; the scene and control queryables answer; a stalled subscriber does not
-//! change the step rate; a server killed with SIGKILL restarts cleanly. Every wait is bounded.
+//! The server over its real transports on loopback (the harness's in-process server on an
+//! ephemeral port and a unique world name per test): poses arrive at the step rate with increasing
+//! sequence and the same bytes on Zenoh and iceoryx2; a winch command over either transport turns
+//! the drum; the deadman releases when the sender stops; malformed inputs are counted; the scene
+//! and control queryables answer; a stalled subscriber does not change the step rate. Every wait
+//! is bounded. (The server binary's own runs are in `server/tests/serve_binary.rs`.)
 
-#![cfg(all(feature = "zenoh", feature = "iceoryx2"))]
+#![cfg(feature = "live")]
 
 use std::collections::HashMap;
-use std::net::TcpListener;
-use std::sync::Arc;
-use std::sync::atomic::{AtomicBool, Ordering};
-use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
 use iceoryx2::prelude::*;
 use pivotsim_msgs as msgs;
-use pivotsim_server::serve::{ServeConfig, ServeReport, ZenohOptions, run};
+use pivotsim_tests::Server;
 use zenoh::Wait;
 
 /// The drum-and-slider rig of the engine tests.
-const RIG: &str = include_str!("support/rig.toml");
-
-fn free_endpoint() -> String {
-    let l = TcpListener::bind("127.0.0.1:0").unwrap();
-    format!("tcp/127.0.0.1:{}", l.local_addr().unwrap().port())
-}
+const RIG: &str = include_str!("../../server/tests/support/rig.toml");
 
 fn rig_path(tag: &str) -> String {
     let p = std::env::temp_dir().join(format!("pivotsim-transport-{}-{tag}.toml", std::process::id()));
@@ -33,80 +24,17 @@ fn rig_path(tag: &str) -> String {
     p.display().to_string()
 }
 
-struct Server {
-    endpoint: String,
-    world: msgs::WorldName,
-    shutdown: Arc<AtomicBool>,
-    thread: Option<JoinHandle<ServeReport>>,
-}
-
-impl Server {
-    fn start(tag: &str, scene: &str) -> Server {
-        let endpoint = free_endpoint();
-        let world = format!("t{}-{tag}", std::process::id());
-        let config = ServeConfig {
-            scene: scene.to_string(),
-            world: world.clone(),
-            zenoh: Some(ZenohOptions { listen: vec![endpoint.clone()], ..ZenohOptions::default() }),
-            ..ServeConfig::default()
-        };
-        let shutdown = Arc::new(AtomicBool::new(false));
-        let flag = shutdown.clone();
-        let thread = std::thread::spawn(move || run(&config, flag).expect("server runs"));
-        Server { endpoint, world: msgs::WorldName::new(world).unwrap(), shutdown, thread: Some(thread) }
-    }
-
-    fn key(&self, t: msgs::Topic) -> String {
-        self.world.key(t)
-    }
-
-    fn stop(mut self) -> ServeReport {
-        self.shutdown.store(true, Ordering::Relaxed);
-        self.thread.take().unwrap().join().unwrap()
-    }
-}
-
-impl Drop for Server {
-    fn drop(&mut self) {
-        self.shutdown.store(true, Ordering::Relaxed);
-        if let Some(t) = self.thread.take() {
-            let _ = t.join();
-        }
-    }
-}
-
 /// A client session on loopback, connected to the server, once its scene queryable answers.
 fn client(server: &Server) -> zenoh::Session {
-    let mut c = zenoh::Config::default();
-    c.insert_json5("mode", "\"peer\"").unwrap();
-    c.insert_json5("listen/endpoints", "[]").unwrap();
-    c.insert_json5("connect/endpoints", &format!("[\"{}\"]", server.endpoint)).unwrap();
-    c.insert_json5("scouting/multicast/enabled", "false").unwrap();
-    let s = zenoh::open(c).wait().unwrap();
-    let deadline = Instant::now() + Duration::from_secs(10);
-    while Instant::now() < deadline {
-        if scene(&s, server).is_some() {
-            return s;
-        }
-        std::thread::sleep(Duration::from_millis(50));
-    }
-    panic!("the server did not answer its scene queryable within 10 s");
+    server.session()
 }
 
 fn scene(s: &zenoh::Session, server: &Server) -> Option<msgs::SceneDescription> {
-    let replies = s.get(server.key(msgs::Topic::Scene)).timeout(Duration::from_millis(500)).wait().ok()?;
-    let reply = replies.recv_timeout(Duration::from_millis(600)).ok()??;
-    let bytes = reply.result().ok()?.payload().to_bytes().into_owned();
-    msgs::SceneDescription::decode(&bytes).ok()
+    server.scene(s)
 }
 
 fn control(s: &zenoh::Session, server: &Server, command: msgs::ControlCommand) -> msgs::ControlOutcome {
-    let mut buf = Vec::new();
-    msgs::ControlRequest { id: 42, command }.encode(&mut buf).unwrap();
-    let replies =
-        s.get(server.key(msgs::Topic::Control)).payload(buf).timeout(Duration::from_secs(2)).wait().unwrap();
-    let reply = replies.recv_timeout(Duration::from_secs(3)).unwrap().expect("a reply");
-    let r = msgs::ControlReply::decode(&reply.result().unwrap().payload().to_bytes()).unwrap();
+    let r = server.control(s, 42, command);
     assert_eq!(r.id, 42);
     r.outcome
 }
@@ -146,7 +74,7 @@ fn latest_stats(s: &zenoh::Session, server: &Server) -> msgs::SolverStats {
 
 #[test]
 fn poses_arrive_at_the_step_rate_in_sequence_and_the_scene_answers() {
-    let server = Server::start("rate", "pendulum");
+    let server = Server::start("pendulum", "rate");
     let s = client(&server);
     let d = scene(&s, &server).unwrap();
     assert_eq!(d.scene, "pendulum");
@@ -168,7 +96,7 @@ fn poses_arrive_at_the_step_rate_in_sequence_and_the_scene_answers() {
 
 #[test]
 fn a_winch_command_turns_the_drum_and_the_deadman_releases_it() {
-    let server = Server::start("winch", &rig_path("winch"));
+    let server = Server::start(&rig_path("winch"), "winch");
     let s = client(&server);
     let key = server.key(msgs::Topic::Winch);
     // Drive at 1 rad/s, 30 Hz, for 0.6 s.
@@ -206,7 +134,7 @@ fn a_winch_command_turns_the_drum_and_the_deadman_releases_it() {
 
 #[test]
 fn malformed_inputs_over_zenoh_are_counted_and_control_answers() {
-    let server = Server::start("bad", &rig_path("bad"));
+    let server = Server::start(&rig_path("bad"), "bad");
     let s = client(&server);
     let key = server.key(msgs::Topic::Winch);
     s.put(&key, b"not a frame".to_vec()).wait().unwrap();
@@ -235,7 +163,7 @@ fn malformed_inputs_over_zenoh_are_counted_and_control_answers() {
 
 #[test]
 fn a_stalled_subscriber_does_not_change_the_step_rate() {
-    let server = Server::start("stall", "box_stack");
+    let server = Server::start("box_stack", "stall");
     let s = client(&server);
     // A Zenoh subscriber (its own session) whose callback blocks for 300 ms per frame, and an
     // iceoryx2 subscriber that never reads.
@@ -265,7 +193,7 @@ fn a_stalled_subscriber_does_not_change_the_step_rate() {
 
 #[test]
 fn iceoryx2_carries_the_same_pose_bytes_and_takes_inputs() {
-    let server = Server::start("iox", &rig_path("iox"));
+    let server = Server::start(&rig_path("iox"), "iox");
     let s = client(&server);
     let node = NodeBuilder::new().create::<ipc::Service>().unwrap();
     let open = |what: &str| {
@@ -314,81 +242,4 @@ fn iceoryx2_carries_the_same_pose_bytes_and_takes_inputs() {
         .count();
     assert!((8..=20).contains(&turning), "{turning} frames at the commanded −0.5 rad/s (≈ 250 ms)");
     server.stop();
-}
-
-/// A server process killed with SIGKILL leaves its shared memory behind; the next one cleans it
-/// and serves on the same world.
-#[test]
-fn a_server_killed_with_sigkill_restarts_cleanly() {
-    let world = format!("k{}", std::process::id());
-    let spawn = || {
-        std::process::Command::new(env!("CARGO_BIN_EXE_pivotsim-server"))
-            .args(["serve", "--scene", "pendulum", "--world", &world, "--listen", &free_endpoint()])
-            .arg("--status-interval")
-            .arg("0")
-            .stdout(std::process::Stdio::null())
-            .stderr(std::process::Stdio::null())
-            .spawn()
-            .unwrap()
-    };
-    let node = NodeBuilder::new().create::<ipc::Service>().unwrap();
-    let name = format!("pivotsim/{world}/poses");
-    let first_frame = |deadline: Duration| -> Option<u64> {
-        let end = Instant::now() + deadline;
-        while Instant::now() < end {
-            if let Ok(service) =
-                node.service_builder(&name.as_str().try_into().unwrap()).publish_subscribe::<[u8]>().open()
-                && let Ok(sub) = service.subscriber_builder().create()
-            {
-                let end2 = Instant::now() + Duration::from_secs(2);
-                while Instant::now() < end2 {
-                    if let Ok(Some(s)) = sub.receive() {
-                        return Some(msgs::PoseFrameView::parse(s.payload()).unwrap().sequence());
-                    }
-                    std::thread::sleep(Duration::from_millis(10));
-                }
-            }
-            std::thread::sleep(Duration::from_millis(50));
-        }
-        None
-    };
-    let mut a = spawn();
-    assert!(first_frame(Duration::from_secs(10)).is_some(), "the first server publishes");
-    a.kill().unwrap(); // SIGKILL
-    a.wait().unwrap();
-    let mut b = spawn();
-    let seq = first_frame(Duration::from_secs(10));
-    let alive = b.try_wait().unwrap().is_none();
-    // SIGTERM: a clean shutdown that releases the shared memory (Ctrl-C does the same).
-    let term = std::process::Command::new("kill").args(["-TERM", &b.id().to_string()]).status();
-    let deadline = Instant::now() + Duration::from_secs(10);
-    let mut clean_exit = false;
-    while Instant::now() < deadline {
-        if let Some(st) = b.try_wait().unwrap() {
-            clean_exit = st.success();
-            break;
-        }
-        std::thread::sleep(Duration::from_millis(20));
-    }
-    if b.try_wait().unwrap().is_none() {
-        b.kill().unwrap();
-        b.wait().unwrap();
-    }
-    assert!(alive, "the second server is running");
-    if term.is_ok_and(|s| s.success()) {
-        assert!(clean_exit, "SIGTERM stops the server cleanly");
-    }
-    assert!(seq.is_some(), "the restarted server publishes on the same world");
-}
-
-/// The README's main command: no subcommand serves the default scene.
-#[test]
-fn the_default_command_serves_the_default_scene() {
-    let out = std::process::Command::new(env!("CARGO_BIN_EXE_pivotsim-server"))
-        .args(["--steps", "30", "--fast", "--no-iceoryx2", "--listen", &free_endpoint()])
-        .output()
-        .unwrap();
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
-    let text = String::from_utf8_lossy(&out.stdout);
-    assert!(text.starts_with("30 steps"), "{text}");
 }

@@ -1,5 +1,5 @@
-//! Every problem in `shared/data/mlcp` (Siconos test problems written by others) and
-//! `shared/data/mlcp-scene` (paper-like islands) solved by every exact variant, judged by the
+//! Every problem in `tests/data/siconos` (Siconos test problems written by others) and
+//! `tests/data/scene-shaped` (paper-like islands) solved by every exact variant, judged by the
 //! natural-map residual against the true (final-normal-impulse) friction bounds.
 //!
 //! Every file must converge within 1000 pivot steps to a relative residual of 1e-9 (1e-6 where
@@ -11,9 +11,9 @@ use std::path::PathBuf;
 use pivotsim_server::solver::{SolveStatus, Solver, SolverOptions, Variant, io};
 
 fn files() -> Vec<PathBuf> {
-    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../shared/data");
+    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/data");
     let mut out = Vec::new();
-    for dir in ["mlcp", "mlcp-scene"] {
+    for dir in ["siconos", "scene-shaped"] {
         let Ok(rd) = std::fs::read_dir(root.join(dir)) else { continue };
         for e in rd.flatten() {
             let p = e.path();
@@ -27,9 +27,9 @@ fn files() -> Vec<PathBuf> {
 }
 
 #[test]
-fn every_shared_problem_with_every_exact_variant() {
+fn every_data_problem_with_every_exact_variant() {
     let files = files();
-    assert!(files.len() >= 20, "shared data not found beside the repository ({} files)", files.len());
+    assert!(files.len() >= 20, "test problems not found in server/tests/data ({} files)", files.len());
     let mut report = Vec::new();
     let mut unexpected = Vec::new();
     for f in &files {

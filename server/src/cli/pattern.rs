@@ -1,4 +1,4 @@
-//! Sparsity-pattern plots (paper Fig. 5 and 6): `A` in its input order, `A` after the
+//! `pattern`: sparsity-pattern plots (paper Fig. 5 and 6): `A` in its input order, `A` after the
 //! (reverse) Cuthill–McKee reordering, and the factor `L₀` with its stored envelope (skyline).
 
 use std::path::Path;
@@ -6,9 +6,9 @@ use std::path::Path;
 use anyhow::anyhow;
 use plotters::prelude::*;
 
-use crate::solver::envelope::Envelope;
-use crate::solver::ordering::{self, OrderingWorkspace};
-use crate::solver::{OrderingKind, SymCsr};
+use pivotsim_server::solver::envelope::Envelope;
+use pivotsim_server::solver::ordering::{self, OrderingWorkspace};
+use pivotsim_server::solver::{OrderingKind, SymCsr, io};
 
 /// What a pattern plot shows, in numbers.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -157,4 +157,24 @@ mod tests {
         assert!(svg.starts_with("<svg") && svg.contains("RCM"));
         std::fs::remove_file(&path).ok();
     }
+}
+
+/// Runs `pattern`: plots `file`'s matrix into `out` and prints the numbers.
+pub fn pattern(file: &Path, out: &Path, ordering: OrderingKind) -> anyhow::Result<()> {
+    let p = io::read_mlcp_file(file)?;
+    let info = sparsity_svg(out, p.a(), ordering)?;
+    println!(
+        "{}: m={} nnz={} bandwidth {}→{} envelope {}→{} factor {} stored / {} non-zero → {}",
+        file.display(),
+        info.m,
+        info.nnz,
+        info.bandwidth_before,
+        info.bandwidth_after,
+        info.envelope_before,
+        info.envelope_after,
+        info.factor_entries,
+        info.factor_nonzeros,
+        out.display()
+    );
+    Ok(())
 }

@@ -1,0 +1,19 @@
+//! The binary's command layer: what the subcommands of `pivotsim-server` do beyond the library
+//! (progress bars, plots, reports). `anyhow`, `indicatif` and `plotters` stay here, out of the
+//! library's API.
+//!
+//! | module | command |
+//! |---|---|
+//! | `bench/` | `bench-solver`: kernel crossover, paper Fig. 4, every variant on every problem |
+//! | `pattern.rs` | `pattern`: sparsity plots of an MLCP file (paper Fig. 5 and 6) |
+//! | `run.rs` | `run` (a scene headless) and `scenes` |
+//! | `serve.rs` | `serve`, the default: options, the start message, the final report |
+//! | `solve.rs` | `solve`: one MLCP file, text or JSON (`SolveStats` as it serializes) |
+//! | `values.rs` | parsers that turn hostile numeric values into clear errors |
+
+pub mod bench;
+pub mod pattern;
+pub mod run;
+pub mod serve;
+pub mod solve;
+pub mod values;
