@@ -493,6 +493,7 @@ mod tests {
             totals: StepTotals::from_islands(&islands),
             inputs: InputHealth::default(),
             islands,
+            ..Default::default()
         };
         s.inputs.reject(RejectReason::Stale);
         s.inputs.deadman_active = true;
@@ -536,7 +537,7 @@ mod tests {
             Err(DecodeError::Invalid(StatsError::UnknownVariant { island: 0, code: 7 }))
         );
         let mut b = buf.clone();
-        b[rec + 1] = 5;
+        b[rec + 1] = 6;
         assert!(matches!(
             SolverStats::decode(&b),
             Err(DecodeError::Invalid(StatsError::UnknownStatus { .. }))

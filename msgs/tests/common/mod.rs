@@ -119,6 +119,12 @@ pub fn solver_stats() -> impl Strategy<Value = SolverStats> {
                 islands,
                 unstable: sequence % 2 == 1,
                 unstable_steps: overruns as u16,
+                degraded: DegradedSolves {
+                    capped: overruns,
+                    inexact: overruns / 3,
+                    budget: deadman_trips,
+                    fallback: overruns.rotate_left(7),
+                },
             }
         })
 }
