@@ -51,9 +51,9 @@ pub use pose::{
     MAX_BODIES, POSE_FIXED_LEN, PoseError, PoseFrame, PoseFrameView, PoseFrameWriter, QUAT_NORM_TOLERANCE,
 };
 pub use scene::*;
-pub use stats::{DegradedSolves, 
-    ISLAND_FALLBACK, ISLAND_RECORD_LEN, InputHealth, IslandStats, MAX_ISLANDS, STATS_FIXED_LEN, SolverStats,
-    StatsError, StepTotals,
+pub use stats::{
+    DegradedSolves, ISLAND_FALLBACK, ISLAND_RECORD_LEN, InputHealth, IslandStats, MAX_ISLANDS,
+    STATS_FIXED_LEN, SolverStats, StatsError, StepTotals,
 };
 
 /// Solver variant names as they appear on the wire, in the CLI and in reports.

@@ -103,7 +103,18 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
         Some(Command::Solve(args)) => cli::solve::solve(&args),
-        Some(Command::Run { scene, duration, variant, stats, poses, dump_mlcp, every, dump_hard, json, set }) => {
+        Some(Command::Run {
+            scene,
+            duration,
+            variant,
+            stats,
+            poses,
+            dump_mlcp,
+            every,
+            dump_hard,
+            json,
+            set,
+        }) => {
             let opts = pivotsim_server::run::RunOptions {
                 duration,
                 variant,

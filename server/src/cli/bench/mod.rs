@@ -13,8 +13,11 @@
 //!    file** (the repository's test problems, or `--data DIR`): every
 //!    variant with the paper's step cap (35) and with 1000 steps, plus a run that measures the
 //!    deletion error (paper Table 4) for the variants that delete.
-//! 5. `bench.md`, `bench.json`, `fig4_speedup.svg`, `solve_time.svg` in the output directory, the
-//!    markdown and a summary on stdout.
+//! 5. **The regression corpus** of real islands (`server/tests/data/corpus`, not with `--data`):
+//!    convergence within 35 and 100 steps, warm and cold, total `auto` time per scene set, and the
+//!    per-solve time of its small islands (≤ 30 rows) with each variant (`corpus.rs`).
+//! 6. `bench.md`, `bench.json`, `corpus.json`, `fig4_speedup.svg`, `solve_time.svg` in the output
+//!    directory, the markdown and a summary on stdout.
 //!
 //! Every loop is bounded: repeats are capped, and a 1000-step run whose predicted time exceeds the
 //! mode's budget is skipped (and reported as skipped); a run that converged within 35 steps is not
@@ -27,9 +30,11 @@
 //! | `timing.rs` | medians of timed repeats |
 //! | `kernels.rs` | stage 1 (kernel crossover) and stage 2 (Fig. 4) |
 //! | `problems.rs` | stages 3 and 4: every variant on one problem |
+//! | `corpus.rs` | stage 5: the corpus of real islands |
 //! | `report.rs` | the summary, `bench.md` and the `bench.json` document |
 //! | `plots.rs` | the SVG plots |
 
+mod corpus;
 mod kernels;
 mod plan;
 mod plots;
@@ -209,6 +214,15 @@ pub fn run(cfg: &BenchConfig) -> anyhow::Result<Summary> {
     for (name, group, path, p) in &files {
         problems.push(run_problem(name.clone(), group, Some(path), None, p, &plan, &pb));
     }
+    let corpus_dir = default_data_dirs()[0].0.join("corpus");
+    let corpus = if cfg.data.is_none() && !cfg.tiny {
+        say(format!("[5/5] corpus {}", corpus_dir.display()));
+        corpus::run(&corpus_dir, plan.kernel_target_us, plan.kernel_repeats, |n| {
+            pb.set_message(n.to_string())
+        })
+    } else {
+        corpus::CorpusReport::default()
+    };
     pb.finish_and_clear();
 
     let mut summary = summarize(&plan, &problems, &env_kernels, &dense_kernels);
@@ -226,11 +240,13 @@ pub fn run(cfg: &BenchConfig) -> anyhow::Result<Summary> {
         problems: &problems,
         unreadable_files: &unreadable,
     };
-    let md = markdown(&report);
+    let md = markdown(&report) + &corpus::markdown(&corpus);
     let out = &cfg.out;
     std::fs::write(out.join("bench.md"), &md).with_context(|| format!("cannot write {}", out.display()))?;
     let json = serde_json::to_string_pretty(&report)?;
     std::fs::write(out.join("bench.json"), json)
+        .with_context(|| format!("cannot write {}", out.display()))?;
+    std::fs::write(out.join("corpus.json"), serde_json::to_string_pretty(&corpus)?)
         .with_context(|| format!("cannot write {}", out.display()))?;
     plot_fig4(&out.join("fig4_speedup.svg"), &fig4)?;
     let lo = plan.focus_m as f64 * 0.9;
