@@ -336,7 +336,7 @@ impl Bridge<'_> {
 }
 
 /// Runs the bridge until `shutdown` is set: the Zenoh link, the DDS node, the output topics, the
-/// joy thread, then rounds of [`Bridge::round`].
+/// joy thread, then rounds of `Bridge::round`.
 pub fn run(config: &BridgeConfig, shutdown: Arc<AtomicBool>) -> anyhow::Result<BridgeReport> {
     let world = msgs::WorldName::new(config.world.clone()).map_err(|e| anyhow!("world name: {e}"))?;
     let zc = zenoh_link::config(&config.connect, config.zenoh_config.as_deref())?;

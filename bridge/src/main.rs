@@ -31,7 +31,7 @@ struct Cli {
     #[arg(long)]
     zenoh_config: Option<PathBuf>,
     /// DDS domain id (default: $ROS_DOMAIN_ID, else 0).
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     domain_id: Option<u16>,
     /// Use only this local interface address for DDS (repeatable; e.g. 127.0.0.1 keeps
     /// everything on this host). Default: every interface.
@@ -50,13 +50,13 @@ struct Cli {
     #[arg(long, default_value = "pivotsim_bridge")]
     node_name: String,
     /// /pivotsim/stats rate (Hz), 0.01 to 1000.
-    #[arg(long, default_value_t = 10.0, value_parser = stats_rate)]
+    #[arg(long, allow_negative_numbers = true, default_value_t = 10.0, value_parser = stats_rate)]
     stats_rate: f64,
     /// Joystick source id of the forwarded frames (default: random).
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     source_id: Option<u32>,
     /// Log the counters every this many seconds (0: never; else 0.001 to 86400).
-    #[arg(long, default_value_t = 10.0, value_parser = log_interval)]
+    #[arg(long, allow_negative_numbers = true, default_value_t = 10.0, value_parser = log_interval)]
     log_interval: f64,
 }
 

@@ -3,8 +3,8 @@
 //!
 //! | module | what | feature |
 //! |---|---|---|
-//! | [`inbox`] | a bounded hand-over from transport threads and callbacks to one loop: a full inbox drops and counts, it never blocks the transport | — |
-//! | [`clock`] | the wall clock the frames carry (ns since the UNIX epoch) | — |
+//! | [`inbox`](mod@inbox) | a bounded hand-over from transport threads and callbacks to one loop: a full inbox drops and counts, it never blocks the transport | — |
+//! | [`clock`](mod@clock) | the wall clock the frames carry (ns since the UNIX epoch) | — |
 //! | `zenoh_config` | the Zenoh configuration of a peer on given endpoints, multicast scouting off unless asked, or a configuration file | `zenoh` |
 //! | `iox` | iceoryx2 nodes and a world's byte services with the server's settings (safe overflow, subscriber buffer [`pivotsim_msgs::IOX_SUBSCRIBER_BUFFER`]) | `iceoryx2` |
 //!

@@ -37,7 +37,7 @@ enum Command {
         #[arg(long)]
         scene: String,
         /// Simulated seconds, a finite number > 0 up to 1e6 (default: the scene's duration).
-        #[arg(long, value_parser = values::run_seconds)]
+        #[arg(long, allow_negative_numbers = true, value_parser = values::run_seconds)]
         duration: Option<f64>,
         /// Solver variant for every island (default: the scene's).
         #[arg(long)]
@@ -52,7 +52,7 @@ enum Command {
         #[arg(long)]
         dump_mlcp: Option<PathBuf>,
         /// With --dump-mlcp: every N-th step (N ≥ 1).
-        #[arg(long, default_value_t = 60, value_parser = clap::value_parser!(u32).range(1..))]
+        #[arg(long, allow_negative_numbers = true, default_value_t = 60, value_parser = clap::value_parser!(u32).range(1..))]
         every: u32,
         /// With --dump-mlcp: instead of every N-th step, the N hardest island solves of the run
         /// (not converged first, then most pivot steps, then slowest), with their warm starts.

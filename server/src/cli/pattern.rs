@@ -130,6 +130,26 @@ fn plot_err<E: std::fmt::Display>(e: E) -> anyhow::Error {
     anyhow!("plot: {e}")
 }
 
+/// Runs `pattern`: plots `file`'s matrix into `out` and prints the numbers.
+pub fn pattern(file: &Path, out: &Path, ordering: OrderingKind) -> anyhow::Result<()> {
+    let p = io::read_mlcp_file(file)?;
+    let info = sparsity_svg(out, p.a(), ordering)?;
+    println!(
+        "{}: m={} nnz={} bandwidth {}→{} envelope {}→{} factor {} stored / {} non-zero → {}",
+        file.display(),
+        info.m,
+        info.nnz,
+        info.bandwidth_before,
+        info.bandwidth_after,
+        info.envelope_before,
+        info.envelope_after,
+        info.factor_entries,
+        info.factor_nonzeros,
+        out.display()
+    );
+    Ok(())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -157,24 +177,4 @@ mod tests {
         assert!(svg.starts_with("<svg") && svg.contains("RCM"));
         std::fs::remove_file(&path).ok();
     }
-}
-
-/// Runs `pattern`: plots `file`'s matrix into `out` and prints the numbers.
-pub fn pattern(file: &Path, out: &Path, ordering: OrderingKind) -> anyhow::Result<()> {
-    let p = io::read_mlcp_file(file)?;
-    let info = sparsity_svg(out, p.a(), ordering)?;
-    println!(
-        "{}: m={} nnz={} bandwidth {}→{} envelope {}→{} factor {} stored / {} non-zero → {}",
-        file.display(),
-        info.m,
-        info.nnz,
-        info.bandwidth_before,
-        info.bandwidth_after,
-        info.envelope_before,
-        info.envelope_after,
-        info.factor_entries,
-        info.factor_nonzeros,
-        out.display()
-    );
-    Ok(())
 }

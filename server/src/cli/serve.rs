@@ -44,20 +44,20 @@ pub struct ServeArgs {
     pub no_iceoryx2: bool,
     /// Simulated seconds per wall second: a finite number > 0 whose step period `h / rtf` is at
     /// most a minute.
-    #[arg(long, default_value_t = 1.0, value_parser = values::positive_finite)]
+    #[arg(long, allow_negative_numbers = true, default_value_t = 1.0, value_parser = values::positive_finite)]
     pub rtf: f64,
     /// Step as fast as possible instead of in real time.
     #[arg(long)]
     pub fast: bool,
     /// Deadman timeout in milliseconds, 1 to 3,600,000: actuators return to neutral after this
     /// long without an input.
-    #[arg(long, default_value_t = 250, value_parser = clap::value_parser!(u64).range(1..=MAX_DEADMAN_MS))]
+    #[arg(long, allow_negative_numbers = true, default_value_t = 250, value_parser = clap::value_parser!(u64).range(1..=MAX_DEADMAN_MS))]
     pub deadman_ms: u64,
     /// Seconds between status lines (0: none; default 1 s on a terminal, none otherwise).
-    #[arg(long, value_parser = values::status_interval)]
+    #[arg(long, allow_negative_numbers = true, value_parser = values::status_interval)]
     pub status_interval: Option<f64>,
     /// Stop after this many steps.
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub steps: Option<u64>,
     /// Start paused.
     #[arg(long)]

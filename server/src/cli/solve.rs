@@ -20,13 +20,13 @@ pub struct SolveArgs {
     #[arg(long, default_value = "auto")]
     pub variant: Variant,
     /// Cap on pivot steps (PGS: sweeps), 1 to 1,000,000.
-    #[arg(long, default_value_t = 35, value_parser = clap::value_parser!(u32).range(1..=1_000_000))]
+    #[arg(long, allow_negative_numbers = true, default_value_t = 35, value_parser = clap::value_parser!(u32).range(1..=1_000_000))]
     pub max_steps: u32,
     /// Reordering for the envelope variants: natural, cm, rcm.
     #[arg(long, default_value = "rcm")]
     pub ordering: OrderingKind,
     /// Relative natural-map residual to reach (a finite number > 0).
-    #[arg(long, default_value_t = 1e-10, value_parser = values::positive_finite)]
+    #[arg(long, allow_negative_numbers = true, default_value_t = 1e-10, value_parser = values::positive_finite)]
     pub tol: f64,
     /// Write λ here (one number per line, 17 significant digits).
     #[arg(long)]

@@ -309,9 +309,9 @@ pub fn run_with(
         bodies: engine.scene().world.bodies().len(),
         timestep: engine.scene().world.settings().timestep,
         pace: match config.realtime_factor {
-            Some(r) if r == 1.0 => "real time".into(),
-            Some(r) => format!("real-time factor {r}"),
             None => "as fast as possible".into(),
+            Some(r) if (r - 1.0).abs() < f64::EPSILON => "real time".into(),
+            Some(r) => format!("real-time factor {r}"),
         },
         world: world.as_str().to_string(),
         transports: transports.iter().map(|t| t.describe()).collect(),

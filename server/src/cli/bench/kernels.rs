@@ -16,6 +16,7 @@ use serde::Serialize;
 use super::plan::Plan;
 use super::timing::{time_us, us};
 
+/// Dense Cholesky factorizations until `budget_us` has passed (bounded by 100 000 rounds).
 pub fn warm_up(budget_us: f64) {
     let n = 120;
     let mut rng = ChaCha8Rng::seed_from_u64(99);

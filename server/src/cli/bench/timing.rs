@@ -33,8 +33,7 @@ pub fn time_us(target_us: f64, repeats: usize, mut f: impl FnMut()) -> f64 {
     median(&mut samples)
 }
 
-/// Dense Cholesky factorizations until `budget_us` has passed (bounded by 100 000 rounds).
-
+/// Geometric mean of the finite positive values (`None` when there are none).
 pub fn geo_mean(v: &[f64]) -> Option<f64> {
     let v: Vec<f64> = v.iter().copied().filter(|x| x.is_finite() && *x > 0.0).collect();
     if v.is_empty() { None } else { Some((v.iter().map(|x| x.ln()).sum::<f64>() / v.len() as f64).exp()) }
