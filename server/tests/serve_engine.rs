@@ -328,3 +328,40 @@ fn every_builtin_scene_has_a_valid_description_and_pose_frame() {
         }
     }
 }
+
+/// `serve --set` overrides the start scene's settings (and again at a reset), `--max-solve-us`
+/// puts every solve of a step under a budget: a budget far below one pivot step stops the solves
+/// with status `budget`, and the stats frame counts them (since the scene was loaded) beside the
+/// per-island status, so no degraded solve is silent.
+#[test]
+fn overrides_and_the_solve_budget_reach_the_world_and_the_stats() {
+    let set: Vec<pivotsim_server::scene::SceneOverride> =
+        vec!["max_pivot_steps=7".parse().unwrap(), "contact_compliance=1e-9".parse().unwrap()];
+    let world = msgs::WorldName::new("test").unwrap();
+    let mut e = Engine::with_settings("forklift", world.clone(), DEADMAN, &set, Some(0.001)).unwrap();
+    assert_eq!(e.scene().world.settings().solver.max_steps, 7);
+    assert_eq!(e.scene().world.settings().solver.max_solve_us, Some(0.001));
+    let t0 = Instant::now();
+    let mut budget_islands = 0u32;
+    for k in 0..30 {
+        e.tick(t0 + Duration::from_millis(17 * k));
+        let st = msgs::SolverStats::decode(e.stats_frame()).unwrap();
+        budget_islands += st.islands.iter().filter(|i| i.status == msgs::SolveStatus::Budget).count() as u32;
+        assert_eq!(
+            st.degraded.budget, budget_islands,
+            "step {k}: counted on the wire as seen in the records"
+        );
+    }
+    assert!(budget_islands > 0, "a budget of 1 ns stopped no solve");
+    // A reset reloads the start scene with the same overrides and clears the counters.
+    use msgs::ControlCommand as C;
+    let msgs::ControlOutcome::Ok(_) = control(&mut e, 1, C::Reset) else { panic!("reset") };
+    assert_eq!(e.scene().world.settings().solver.max_steps, 7);
+    assert_eq!(msgs::SolverStats::decode(e.stats_frame()).unwrap().degraded, msgs::DegradedSolves::default());
+    // An override that names nothing is a typed error, not a half-loaded world.
+    let bad = vec!["body.nosuchbody.mass=3".parse().unwrap()];
+    assert!(matches!(
+        Engine::with_settings("forklift", world, DEADMAN, &bad, None),
+        Err(pivotsim_server::scene::SceneError::Override { .. })
+    ));
+}

@@ -62,6 +62,15 @@ pub struct ServeArgs {
     /// Start paused.
     #[arg(long)]
     pub paused: bool,
+    /// Override a setting of the start scene (repeatable; again at each reset):
+    /// `contact_compliance=1e-10`, `body.log.mass=800` (scenes/README.md, "Overriding settings").
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    pub set: Vec<pivotsim_server::scene::SceneOverride>,
+    /// Time budget of the island solves of one step (µs), for every scene loaded: a finite number
+    /// > 0. A solve that spends it returns its best safe iterate (status `budget`, counted in the
+    /// stats), so no step overruns because of the solver (default: the scene's `max_solve_us`).
+    #[arg(long, value_parser = values::positive_finite, allow_negative_numbers = true)]
+    pub max_solve_us: Option<f64>,
 }
 
 impl ServeArgs {
@@ -87,6 +96,8 @@ impl ServeArgs {
             status_interval,
             max_steps: self.steps,
             start_paused: self.paused,
+            overrides: self.set,
+            max_solve_us: self.max_solve_us,
         }
     }
 }

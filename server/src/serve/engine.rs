@@ -59,6 +59,11 @@ pub struct Engine {
     unstable: bool,
     /// Degraded island solves since the scene was (re)loaded (published every step).
     degraded: msgs::DegradedSolves,
+    /// Scene settings overridden at start (`serve --set`), applied to the start scene and its resets.
+    overrides: Vec<scene::SceneOverride>,
+    start_scene: String,
+    /// Server-wide solve time budget (`serve --max-solve-us`), applied to every scene loaded.
+    max_solve_us: Option<f64>,
 }
 
 impl Engine {
@@ -68,7 +73,23 @@ impl Engine {
         world_name: msgs::WorldName,
         deadman: Duration,
     ) -> Result<Engine, SceneError> {
-        let scene = scene::load(scene_ref)?;
+        Engine::with_settings(scene_ref, world_name, deadman, &[], None)
+    }
+
+    /// [`Engine::new`] with the start scene's settings overridden (`--set KEY=VALUE`; again at every
+    /// `reset` of it) and a solve time budget per step for every scene (`--max-solve-us`).
+    pub fn with_settings(
+        scene_ref: &str,
+        world_name: msgs::WorldName,
+        deadman: Duration,
+        overrides: &[scene::SceneOverride],
+        max_solve_us: Option<f64>,
+    ) -> Result<Engine, SceneError> {
+        let mut scene = scene::load_with(scene_ref, overrides)?;
+        apply_budget(&mut scene, max_solve_us).map_err(|e| SceneError::Override {
+            file: scene_ref.to_string(),
+            source: scene::OverrideError::Key(format!("max_solve_us: {e}")),
+        })?;
         let watchdog = Watchdog::new(&scene.world, scene.watchdog);
         let mut e = Engine {
             scene_ref: scene_ref.to_string(),
@@ -95,7 +116,13 @@ impl Engine {
             watchdog,
             unstable: false,
             degraded: msgs::DegradedSolves::default(),
+            overrides: Vec::new(),
+            start_scene: String::new(),
+            max_solve_us: None,
         };
+        e.overrides = overrides.to_vec();
+        e.start_scene = scene_ref.to_string();
+        e.max_solve_us = max_solve_us;
         e.scene_changed();
         e.encode_frames(0);
         Ok(e)
@@ -367,13 +394,16 @@ impl Engine {
 
     fn load(&mut self, scene_ref: &str) -> Result<(), (msgs::ControlErrorCode, String)> {
         let variant = self.scene.world.settings().solver.variant;
-        let mut sc = scene::load(scene_ref).map_err(|e| match e {
+        let overrides: &[scene::SceneOverride] =
+            if scene_ref == self.start_scene { &self.overrides } else { &[] };
+        let mut sc = scene::load_with(scene_ref, overrides).map_err(|e| match e {
             SceneError::Unknown { .. } => (msgs::ControlErrorCode::UnknownScene, e.to_string()),
             _ => (msgs::ControlErrorCode::SceneLoadFailed, e.to_string()),
         })?;
-        // The live variant carries over to the new scene.
+        // The live variant and the server's budget carry over to the new scene.
         let mut s = *sc.world.settings();
         s.solver.variant = variant;
+        s.solver.max_solve_us = self.max_solve_us.or(s.solver.max_solve_us);
         sc.world.set_settings(s).map_err(|e| (msgs::ControlErrorCode::Internal, e.to_string()))?;
         info!("scene `{}` loaded from {}", sc.name, sc.source);
         self.scene = sc;
@@ -485,4 +515,14 @@ impl Engine {
             warn!("stats frame not encodable: {e}");
         }
     }
+}
+
+/// Sets the server-wide solve time budget on a scene's world (`None`: the scene's own).
+fn apply_budget(scene: &mut Scene, max_solve_us: Option<f64>) -> Result<(), crate::dynamics::SettingsError> {
+    if let Some(us) = max_solve_us {
+        let mut s = *scene.world.settings();
+        s.solver.max_solve_us = Some(us);
+        scene.world.set_settings(s)?;
+    }
+    Ok(())
 }

@@ -102,6 +102,12 @@ pub struct ServeConfig {
     pub max_steps: Option<u64>,
     /// Start paused.
     pub start_paused: bool,
+    /// Settings of the start scene overridden (`--set KEY=VALUE`), again at each reset of it.
+    pub overrides: Vec<crate::scene::SceneOverride>,
+    /// Time budget (µs) of the island solves of one step, for every scene loaded (`None`: the
+    /// scene's own `max_solve_us`): the solver returns its best safe iterate when it is spent, so a
+    /// step never overruns because of the solver (by more than one pivot step).
+    pub max_solve_us: Option<f64>,
 }
 
 impl Default for ServeConfig {
@@ -116,6 +122,8 @@ impl Default for ServeConfig {
             status_interval: None,
             max_steps: None,
             start_paused: false,
+            overrides: Vec::new(),
+            max_solve_us: None,
         }
     }
 }
@@ -276,7 +284,13 @@ pub fn run_with(
 ) -> Result<ServeReport, ServeError> {
     let world = msgs::WorldName::new(config.world.clone())?;
     check_deadman(config.deadman)?;
-    let mut engine = Engine::new(&config.scene, world.clone(), config.deadman)?;
+    let mut engine = Engine::with_settings(
+        &config.scene,
+        world.clone(),
+        config.deadman,
+        &config.overrides,
+        config.max_solve_us,
+    )?;
     engine.set_paused(config.start_paused);
     if let Some(r) = config.realtime_factor {
         step_period(engine.scene().world.settings().timestep, r)?;
