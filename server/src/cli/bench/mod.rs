@@ -82,12 +82,17 @@ impl BenchConfig {
 /// `cargo run` is usually started from) or to `server/`: the Siconos problems and the scene-shaped
 /// islands of `server/tests/data/` (nothing outside the repository; `--data DIR` for others).
 fn default_data_dirs() -> Vec<(PathBuf, &'static str)> {
-    let root = ["server/tests/data", "tests/data"]
+    let root = data_root();
+    vec![(root.join("siconos"), "siconos"), (root.join("scene-shaped"), "scene")]
+}
+
+/// `server/tests/data`, seen from the repository root or from `server/`.
+fn data_root() -> PathBuf {
+    ["server/tests/data", "tests/data"]
         .into_iter()
         .map(PathBuf::from)
         .find(|p| p.join("siconos").is_dir())
-        .unwrap_or_else(|| PathBuf::from("server/tests/data"));
-    vec![(root.join("siconos"), "siconos"), (root.join("scene-shaped"), "scene")]
+        .unwrap_or_else(|| PathBuf::from("server/tests/data"))
 }
 
 fn txt_files(dir: &Path) -> Vec<PathBuf> {
@@ -214,7 +219,7 @@ pub fn run(cfg: &BenchConfig) -> anyhow::Result<Summary> {
     for (name, group, path, p) in &files {
         problems.push(run_problem(name.clone(), group, Some(path), None, p, &plan, &pb));
     }
-    let corpus_dir = default_data_dirs()[0].0.join("corpus");
+    let corpus_dir = data_root().join("corpus");
     let corpus = if cfg.data.is_none() && !cfg.tiny {
         say(format!("[5/5] corpus {}", corpus_dir.display()));
         corpus::run(&corpus_dir, plan.kernel_target_us, plan.kernel_repeats, |n| {
