@@ -75,7 +75,7 @@ pub struct VariantResult {
 #[derive(Debug, Clone, Serialize)]
 pub struct ProblemResult {
     pub name: String,
-    /// "generated", "scene" (shared/data/mlcp-scene), "siconos" (shared/data/mlcp) or "data".
+    /// "generated", "scene" (tests/data/scene-shaped), "siconos" (tests/data/siconos) or "data" (`--data`).
     pub group: String,
     pub path: Option<String>,
     pub seed: Option<u64>,
