@@ -445,11 +445,17 @@ fn record_step(world: &World, sum: &mut RunSummary, acc: &mut Acc) {
     acc.solve_us.push(solve);
 }
 
+/// How hard a solve was: (did not converge, pivot steps, solve time).
+type Hardness = (bool, usize, f64);
+
+/// One kept solve: its hardness, step, island and problem.
+type HardSolve = (Hardness, u64, usize, crate::solver::Mlcp);
+
 /// The hardest island solves of a run, kept for `--dump-hard` (allocates: offline use only).
 struct HardSolves {
     keep: usize,
-    /// (hardness, step, island, problem), hardest first.
-    kept: Vec<((bool, usize, f64), u64, usize, crate::solver::Mlcp)>,
+    /// Hardest first.
+    kept: Vec<HardSolve>,
 }
 
 impl HardSolves {
@@ -464,9 +470,7 @@ impl HardSolves {
         }
         for (p, s) in world.captured_problems().iter().zip(world.island_stats()) {
             let key = (s.status != SolveStatus::Converged, s.pivot_steps, s.solve_us);
-            let harder = |a: &(bool, usize, f64), b: &(bool, usize, f64)| {
-                (a.0, a.1).cmp(&(b.0, b.1)).then(a.2.total_cmp(&b.2))
-            };
+            let harder = |a: &Hardness, b: &Hardness| (a.0, a.1).cmp(&(b.0, b.1)).then(a.2.total_cmp(&b.2));
             if self.kept.len() == self.keep
                 && self.kept.last().is_some_and(|l| harder(&key, &l.0) != std::cmp::Ordering::Greater)
             {

@@ -66,9 +66,9 @@ pub struct ServeArgs {
     /// `contact_compliance=1e-10`, `body.log.mass=800` (scenes/README.md, "Overriding settings").
     #[arg(long = "set", value_name = "KEY=VALUE")]
     pub set: Vec<pivotsim_server::scene::SceneOverride>,
-    /// Time budget of the island solves of one step (µs), for every scene loaded: a finite number
-    /// > 0. A solve that spends it returns its best safe iterate (status `budget`, counted in the
-    /// stats), so no step overruns because of the solver (default: the scene's `max_solve_us`).
+    /// Time budget of the island solves of one step (µs), a finite number above 0, for every scene
+    /// loaded. A solve that spends it returns its best safe iterate (status `budget`, counted in
+    /// the stats), so no step overruns because of the solver (default: the scene's `max_solve_us`).
     #[arg(long, value_parser = values::positive_finite, allow_negative_numbers = true)]
     pub max_solve_us: Option<f64>,
 }

@@ -44,7 +44,8 @@ impl Solver {
             bl += self.bp[i] * self.lam[i];
         }
         let f = 0.5 * lal - bl;
-        if !(f > 0.0) || !self.zero_feasible {
+        // A NaN merit is not positive: nothing to scale.
+        if f.is_nan() || f <= 0.0 || !self.zero_feasible {
             return false;
         }
         let t = if lal > 0.0 { (bl / lal).clamp(0.0, 1.0) } else { 0.0 };
