@@ -24,6 +24,14 @@ fn hostile_values_of_every_numeric_flag_never_panic() {
         cases.push([&serve[..], &["--steps", "2", "--fast", "--status-interval", v]].concat());
         cases.push(vec!["run", "--scene", "pendulum", "--json", "--duration", v]);
         cases.push(vec!["solve", &problem, "--tol", v]);
+        cases.push([&serve[..], &["--steps", "2", "--fast", "--max-solve-us", v]].concat());
+    }
+    // Scene overrides: a value the scene refuses, a key that names nothing, no `=`.
+    for set in
+        ["max_solve_us=-1", "max_solve_us=nan", "max_pivot_steps=0", "body.nobody.mass=1", "timestep", "="]
+    {
+        cases.push([&serve[..], &["--steps", "2", "--fast", "--set", set]].concat());
+        cases.push(vec!["run", "--scene", "pendulum", "--json", "--duration", "0.1", "--set", set]);
     }
     for v in HOSTILE_INTS {
         cases.push([&serve[..], &["--steps", "2", "--fast", "--deadman-ms", v]].concat());
@@ -38,6 +46,18 @@ fn hostile_values_of_every_numeric_flag_never_panic() {
             "--dump-mlcp",
             "/nonexistent",
             "--every",
+            v,
+        ]);
+        cases.push(vec![
+            "run",
+            "--scene",
+            "pendulum",
+            "--json",
+            "--duration",
+            "0.1",
+            "--dump-mlcp",
+            "/nonexistent",
+            "--dump-hard",
             v,
         ]);
         cases.push(vec!["solve", &problem, "--max-steps", v]);
