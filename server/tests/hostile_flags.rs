@@ -36,30 +36,12 @@ fn hostile_values_of_every_numeric_flag_never_panic() {
     for v in HOSTILE_INTS {
         cases.push([&serve[..], &["--steps", "2", "--fast", "--deadman-ms", v]].concat());
         cases.push([&serve[..], &["--fast", "--steps", v]].concat());
-        cases.push(vec![
-            "run",
-            "--scene",
-            "pendulum",
-            "--json",
-            "--duration",
-            "0.1",
-            "--dump-mlcp",
-            "/nonexistent",
-            "--every",
-            v,
-        ]);
-        cases.push(vec![
-            "run",
-            "--scene",
-            "pendulum",
-            "--json",
-            "--duration",
-            "0.1",
-            "--dump-mlcp",
-            "/nonexistent",
-            "--dump-hard",
-            v,
-        ]);
+        for flag in ["--every", "--dump-hard"] {
+            let dump = ["--dump-mlcp", "/nonexistent", flag, v];
+            cases.push(
+                [&["run", "--scene", "pendulum", "--json", "--duration", "0.1"][..], &dump[..]].concat(),
+            );
+        }
         cases.push(vec!["solve", &problem, "--max-steps", v]);
     }
     // The values the issue named, once more on their own: they panicked or were taken silently.

@@ -466,12 +466,12 @@ fn serve_loop(
 /// The step period `h / rtf`, or why the real-time factor is refused.
 pub fn step_period(timestep: f64, rtf: f64) -> Result<Duration, ServeError> {
     if !(rtf.is_finite() && rtf > 0.0) {
-        return Err(ServeError::Option(format!("real-time factor {rtf} must be a finite number > 0")));
+        return Err(ServeError::Option(format!("real-time factor {rtf:e} must be a finite number > 0")));
     }
     match Duration::try_from_secs_f64(timestep / rtf) {
         Ok(p) if p <= MAX_STEP_PERIOD => Ok(p),
         _ => Err(ServeError::Option(format!(
-            "real-time factor {rtf} gives a step period of {:.3e} s (h = {timestep} s); at most {} s: \
+            "real-time factor {rtf:e} gives a step period of {:.3e} s (h = {timestep} s); at most {} s: \
              use a real-time factor of at least {:.3e}",
             timestep / rtf,
             MAX_STEP_PERIOD.as_secs(),
