@@ -295,9 +295,19 @@ pub fn run(common: &Common, args: &Args) -> Result<ExitCode> {
         (Some(_), None) => line.push_str("; no stats frames (server paused?): outcome unknown"),
         (None, _) => std::thread::sleep(Duration::from_millis(100)),
     }
+    if matches!(sink, InputSink::Iox(_)) {
+        // An iceoryx2 sample lives in this process's data segment: once the publisher is gone, a
+        // subscriber that has not polled yet (a recorder, a bridge, polling at its own rate) loses
+        // it. The server's verdict above says only that the server has it; linger for the others.
+        std::thread::sleep(IOX_LINGER);
+    }
     println!("{line}");
     Ok(code)
 }
+
+/// How long `send` keeps its iceoryx2 publisher after the last frame, for subscribers other than
+/// the server to take the samples (they poll every few milliseconds).
+const IOX_LINGER: Duration = Duration::from_millis(200);
 
 #[cfg(test)]
 mod tests {
