@@ -10,7 +10,7 @@
 //! position projection explicitly enabled** (`projection_iterations = 1`): anchors hold to ~1e-8 m.
 //! It is not the default: the default is the paper's formulation alone (`−φ/h` only, one solve per
 //! step), which conserves energy and angular momentum far better and costs half as much (the
-//! trade is documented in `world.rs`; the 50-link heavy chain runs 141 µs/step without, 272 µs/step
+//! trade is documented in `dynamics/settings.rs`; the 50-link heavy chain runs 141 µs/step without, 272 µs/step
 //! with projection, holding its length to 1e-11 m either way). Without projection the joint *axes*
 //! still hold to ~1e-9 (asserted), and the anchors keep at every step end the second-order error of
 //! integrating a rotation along its chord, `≈ (h ω)² r / 2` for an anchor at lever arm `r` from the

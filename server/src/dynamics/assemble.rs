@@ -237,7 +237,8 @@ mod tests {
     use rand_chacha::ChaCha8Rng;
 
     use super::*;
-    use crate::dynamics::joint::{JointId, JointRow};
+    use crate::dynamics::ids::JointId;
+    use crate::dynamics::joint::JointRow;
     use crate::dynamics::rows::{RowKey, RowKind};
 
     /// `A` and `b` from the per-body blocks equal the dense `J M⁻¹ Jᵀ + C/h²` and

@@ -31,18 +31,7 @@
 use nalgebra::{Isometry3, Matrix3, Quaternion, Translation3, UnitQuaternion, Vector3};
 
 use super::error::BodyError;
-
-/// Stable id of a body in its [`World`](super::World) (index in creation order).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
-pub struct BodyId(pub u32);
-
-impl BodyId {
-    /// The index of the body in the world's body list.
-    #[inline]
-    pub fn index(self) -> usize {
-        self.0 as usize
-    }
-}
+use super::ids::BodyId;
 
 /// How a body moves.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]

@@ -37,9 +37,10 @@
 
 use nalgebra::{Matrix3, Matrix6x3, Vector3};
 
-use super::body::{BodyId, RigidBody};
+use super::accumulator::ForceAccumulator;
+use super::body::RigidBody;
 use super::error::ForceError;
-use super::force::ForceAccumulator;
+use super::ids::BodyId;
 
 /// One sample point of a hull: a vertical slab of volume `volume` and height `height` centred at
 /// `position` (body frame).

@@ -39,10 +39,11 @@
 
 use nalgebra::{UnitQuaternion, Vector3};
 
-use super::body::{BodyBuilder, BodyId, box_inertia, capsule_inertia};
-use super::coupling::{CouplingBuilder, CouplingId};
+use super::body::{BodyBuilder, box_inertia, capsule_inertia};
+use super::coupling::CouplingBuilder;
 use super::error::ChainError;
-use super::joint::{DEFAULT_COMPLIANCE, JointBuilder, JointId, JointKind};
+use super::ids::{BodyId, CouplingId, JointId};
+use super::joint::{DEFAULT_COMPLIANCE, JointBuilder, JointKind};
 use super::motor::JointLimit;
 use super::world::World;
 
@@ -301,8 +302,7 @@ impl World {
             ChainEnd::Body(b) => Some(Some(b)),
         };
         let ball = |name: String, a: BodyId, b: Option<BodyId>, at: f64| {
-            JointBuilder::at(&name, super::JointKind::Ball, a, b, cb.start + u * at, u)
-                .compliance(cb.compliance)
+            JointBuilder::at(&name, JointKind::Ball, a, b, cb.start + u * at, u).compliance(cb.compliance)
         };
         if let Some((hinge, radius)) = cb.drum {
             let housing = self.joint(hinge).and_then(|j| j.body_b());

@@ -36,27 +36,18 @@
 //! ([`World::set_coupling_max_torque`](super::World::set_coupling_max_torque)): engage, slip,
 //! disengage (`0`).
 //!
-//! **Bodies.** A row has at most four body blocks (`rows.rs`): a gear (two joints, four bodies at
-//! most) always fits; a differential fits when its three shafts share their housing (or the world),
-//! as in a car's axle — otherwise the model is refused ([`CouplingError::TooManyBodies`]).
+//! **Bodies.** A coupling's one row touches at most four bodies ([`MAX_COUPLING_BODIES`], which
+//! sizes every row's blocks, `rows.rs`): a gear (two joints, four bodies at most) always fits; a
+//! differential fits when its three shafts share their housing (or the world), as in a car's axle —
+//! otherwise the model is refused ([`CouplingError::TooManyBodies`]).
 
-use super::body::BodyId;
 use super::error::CouplingError;
-use super::joint::{DEFAULT_COMPLIANCE, Joint, JointId};
+use super::ids::{BodyId, CouplingId, JointId};
+use super::joint::{DEFAULT_COMPLIANCE, Joint};
 use super::motor::FreeAxis;
-use super::rows::MAX_ROW_BODIES;
 
-/// Stable id of a coupling in its [`World`](super::World) (index in creation order).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
-pub struct CouplingId(pub u32);
-
-impl CouplingId {
-    /// Index in the world's coupling list.
-    #[inline]
-    pub fn index(self) -> usize {
-        self.0 as usize
-    }
-}
+/// Most bodies one coupling joins (module doc); its row has a block for each.
+pub(crate) const MAX_COUPLING_BODIES: usize = 4;
 
 /// What a coupling couples.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -222,7 +213,7 @@ impl CouplingBuilder {
                 }
             }
         }
-        if bodies.len() > MAX_ROW_BODIES {
+        if bodies.len() > MAX_COUPLING_BODIES {
             return Err(CouplingError::TooManyBodies { coupling: coupling(), bodies: bodies.len() });
         }
         if !(self.compliance.is_finite() && self.compliance >= 0.0) {

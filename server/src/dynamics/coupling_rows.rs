@@ -11,8 +11,8 @@
 
 use super::coupling::Coupling;
 use super::joint::Joint;
-use super::joint_rows::{JointGeometry, Side};
-use super::rows::{ConstraintRow, RowKey, RowKind};
+use super::joint_rows::JointGeometry;
+use super::rows::{ConstraintRow, RowKey, RowKind, Side};
 
 /// Appends the row of `coupling` to `out`; `side(joint)` gives the joint's two ends `(A, B)` at the
 /// current poses.
@@ -46,10 +46,10 @@ mod tests {
     use rand_chacha::ChaCha8Rng;
 
     use super::*;
-    use crate::dynamics::body::BodyId;
-    use crate::dynamics::coupling::{CouplingBuilder, CouplingId};
+    use crate::dynamics::coupling::CouplingBuilder;
     use crate::dynamics::error::CouplingError;
-    use crate::dynamics::joint::{DEFAULT_COMPLIANCE, JOINT_SLOTS, JointId, JointKind};
+    use crate::dynamics::ids::{BodyId, CouplingId, JointId};
+    use crate::dynamics::joint::{DEFAULT_COMPLIANCE, JOINT_SLOTS, JointKind};
     use crate::dynamics::motor::FreeAxis;
     use crate::dynamics::rows::MAX_ROW_BODIES;
 

@@ -10,9 +10,7 @@
 
 use thiserror::Error;
 
-use super::body::BodyId;
-use super::coupling::CouplingId;
-use super::joint::JointId;
+use super::ids::{BodyId, CouplingId, JointId};
 use super::motor::JointMotor;
 use crate::solver::MlcpError;
 

@@ -17,8 +17,9 @@
 //!
 //! unbounded. So the spring is integrated by implicit Euler together with the joints: stable for any
 //! stiffness and mass, exact at rest (`λ / h = −k φ`: the static deflection is `F / k`), and a spring
-//! between two dynamic bodies joins their islands. Its rows are [`RowKind::Force`]: not projected, not
-//! counted as violations. For `L < 1e-12` the direction is undefined and the element applies nothing.
+//! between two dynamic bodies joins their islands. Its rows (built in `force_rows.rs`) are
+//! [`RowKind::Force`](super::RowKind::Force): not projected, not counted as violations. For
+//! `L < 1e-12` the direction is undefined and the element applies nothing.
 //!
 //! **Buoyancy and drag** on sample points against a water plane with optional waves (`buoyancy.rs`):
 //! evaluated at the step's start (time `t`) with their Jacobians — the drag's `D = ∂f/∂v` and the
@@ -32,53 +33,13 @@
 //! then the constraints act with `M` as usual. Equilibria (`f = 0`) and steady speeds are those of
 //! the force law exactly; the scheme is unconditionally stable for the linear part.
 
-use nalgebra::{Matrix6, Vector3};
+use nalgebra::Vector3;
 
-use super::body::{BodyId, RigidBody};
+use super::accumulator::ForceAccumulator;
+use super::body::RigidBody;
 use super::buoyancy::Buoyancy;
 use super::error::ForceError;
-use super::joint_rows::Side;
-use super::rows::{ConstraintRow, Jac6, RowKey, RowKind};
-
-/// Stable id of a force element in its [`World`](super::World).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
-pub struct ForceId(pub u32);
-
-impl ForceId {
-    /// Index in the world's force list.
-    #[inline]
-    pub fn index(self) -> usize {
-        self.0 as usize
-    }
-}
-
-/// Per-body accumulators of the applied forces of a step (world-indexed, reused): force, torque about
-/// the centre of mass, and for bodies with implicit elements (`implicit[i]`) the 6 × 6 Jacobians
-/// `D = ∂f/∂(v, ω)` and `K = ∂f/∂(x, θ)` (module doc).
-#[derive(Debug, Default)]
-pub(crate) struct ForceAccumulator {
-    pub force: Vec<Vector3<f64>>,
-    pub torque: Vec<Vector3<f64>>,
-    pub damping: Vec<Matrix6<f64>>,
-    pub stiffness: Vec<Matrix6<f64>>,
-    pub implicit: Vec<bool>,
-}
-
-impl ForceAccumulator {
-    /// Zeroes everything for `n` bodies.
-    pub fn reset(&mut self, n: usize) {
-        for (v, zero) in [(&mut self.force, Vector3::zeros()), (&mut self.torque, Vector3::zeros())] {
-            v.clear();
-            v.resize(n, zero);
-        }
-        for m in [&mut self.damping, &mut self.stiffness] {
-            m.clear();
-            m.resize(n, Matrix6::zeros());
-        }
-        self.implicit.clear();
-        self.implicit.resize(n, false);
-    }
-}
+use super::ids::BodyId;
 
 /// Linear spring–damper between two body points.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -97,35 +58,6 @@ pub struct SpringDamper {
     pub stiffness: f64,
     /// Damping `c ≥ 0` (N s/m).
     pub damping: f64,
-}
-
-impl SpringDamper {
-    /// Appends the spring's force row (module doc) to `out`, with the ends `a` (body A) and `b` at
-    /// the current poses; nothing for a spring of zero length or with `k = c = 0`.
-    pub(crate) fn push_row(&self, id: ForceId, a: &Side, b: &Side, h: f64, out: &mut Vec<ConstraintRow>) {
-        let (k, c) = (self.stiffness, self.damping);
-        if k == 0.0 && c == 0.0 {
-            return;
-        }
-        let p_a = a.x + a.q * self.anchor_a;
-        let p_b = b.x + b.q * self.anchor_b;
-        let d = p_b - p_a;
-        let l = d.norm();
-        if l < 1e-12 {
-            return;
-        }
-        let n = d / l;
-        let j_a = Jac6::new(-n, -(p_a - a.x).cross(&n));
-        let j_b = Jac6::new(n, (p_b - b.x).cross(&n));
-        let mut r = ConstraintRow::pair(RowKey::Force(id), RowKind::Force, a.index, j_a, b.index, j_b);
-        // c_row = 1/(k + c/h), β = k c_row = h k / (h k + c).
-        let compliance = 1.0 / (k + c / h);
-        let beta = k * compliance;
-        r.phi = l - self.rest_length;
-        r.compliance = compliance;
-        r.rhs = -beta * r.phi / h;
-        out.push(r);
-    }
 }
 
 /// An applied-force element.
@@ -173,7 +105,7 @@ impl ForceElement {
     }
 
     /// Adds the explicit part and the Jacobians of the element at time `t` under gravity `gravity`
-    /// to the accumulators (springs act through their rows instead, [`SpringDamper::push_row`]).
+    /// to the accumulators (springs act through their rows instead, `force_rows.rs`).
     pub(crate) fn accumulate(
         &self,
         bodies: &[RigidBody],

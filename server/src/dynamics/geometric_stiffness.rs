@@ -84,42 +84,10 @@
 use nalgebra::{Matrix3, Vector3};
 
 use super::body::RigidBody;
-use super::joint::Joint;
-use super::joint_rows::{JointGeometry, Side, linear_row_axes};
-use super::step::WarmRow;
-
-/// How the geometric stiffness of loaded joints enters the step (module doc, eq. G3/G4).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-pub enum GeometricStiffness {
-    /// Not at all: the paper's step as published (joints' lever arms frozen at the step start).
-    Off,
-    /// Linearly implicit (G3), as Tournier et al. / Andrews et al.: energy only decays (default).
-    #[default]
-    Implicit,
-    /// As added inertia against the change of velocity only (G4): no added damping; the energy
-    /// oscillates by a few % about its initial value.
-    Inertial,
-}
-
-impl GeometricStiffness {
-    /// Every mode.
-    pub const ALL: [GeometricStiffness; 3] =
-        [GeometricStiffness::Off, GeometricStiffness::Implicit, GeometricStiffness::Inertial];
-
-    /// The name in scene files.
-    pub fn name(self) -> &'static str {
-        match self {
-            GeometricStiffness::Off => "off",
-            GeometricStiffness::Implicit => "implicit",
-            GeometricStiffness::Inertial => "inertial",
-        }
-    }
-
-    /// The mode of a scene-file name.
-    pub fn from_name(name: &str) -> Option<Self> {
-        Self::ALL.into_iter().find(|m| m.name() == name)
-    }
-}
+use super::ids::BodyId;
+use super::joint::{JOINT_SLOTS, Joint};
+use super::joint_rows::{JointGeometry, linear_row_axes};
+use super::rows::{Side, WarmRow};
 
 /// Stiffness ratio `ρ₀ = h² ‖K̃‖ / I_min` at which the correction starts (module doc); full from `2 ρ₀`.
 pub const RHO_START: f64 = 0.25;
@@ -147,7 +115,7 @@ pub(crate) fn bound_stiffness(r: &Vector3<f64>, f: &Vector3<f64>) -> Matrix3<f64
 pub(crate) fn accumulate(
     bodies: &[RigidBody],
     joints: &[Joint],
-    warm: &[[WarmRow; super::JOINT_SLOTS]],
+    warm: &[[WarmRow; JOINT_SLOTS]],
     step: u64,
     h: f64,
     out: &mut Vec<(Matrix3<f64>, f64)>,
@@ -157,7 +125,7 @@ pub(crate) fn accumulate(
     if step == 0 {
         return;
     }
-    let side = |id: Option<super::BodyId>| match id {
+    let side = |id: Option<BodyId>| match id {
         None => Side::world(),
         Some(id) => {
             let b = &bodies[id.index()];

@@ -164,8 +164,8 @@ impl Islands {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::dynamics::coupling::CouplingId;
-    use crate::dynamics::joint::{JointId, JointRow};
+    use crate::dynamics::ids::{CouplingId, JointId};
+    use crate::dynamics::joint::JointRow;
     use crate::dynamics::rows::{Jac6, RowKey, RowKind};
 
     fn row(a: Option<usize>, b: Option<usize>) -> ConstraintRow {

@@ -41,20 +41,8 @@
 
 use nalgebra::{Isometry3, Vector3};
 
-use super::body::BodyId;
+use super::ids::{BodyId, JointId};
 use super::motor::{FreeAxis, JointLimit, JointMotor};
-
-/// Stable id of a joint in its [`World`](super::World) (index in creation order).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
-pub struct JointId(pub u32);
-
-impl JointId {
-    /// Index in the world's joint list.
-    #[inline]
-    pub fn index(self) -> usize {
-        self.0 as usize
-    }
-}
 
 /// Joint types.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]

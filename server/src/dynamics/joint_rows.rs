@@ -39,34 +39,11 @@
 //! geometry it is), so the same definition serves any pose. The Jacobians are checked against
 //! central differences of the violations in the tests below.
 
-use nalgebra::{UnitQuaternion, Vector3};
+use nalgebra::Vector3;
 
 use super::joint::{Joint, JointKind, JointRow};
 use super::motor::FreeAxis;
-use super::rows::{ConstraintRow, Jac6, RowKey, RowKind};
-
-/// Pose and velocity of one end of a joint (`index: None` is the world frame, at rest).
-#[derive(Debug, Clone, Copy)]
-pub(crate) struct Side {
-    pub index: Option<usize>,
-    pub x: Vector3<f64>,
-    pub q: UnitQuaternion<f64>,
-    pub v: Vector3<f64>,
-    pub w: Vector3<f64>,
-}
-
-impl Side {
-    /// The world frame.
-    pub fn world() -> Self {
-        Side {
-            index: None,
-            x: Vector3::zeros(),
-            q: UnitQuaternion::identity(),
-            v: Vector3::zeros(),
-            w: Vector3::zeros(),
-        }
-    }
-}
+use super::rows::{ConstraintRow, Jac6, RowKey, RowKind, Side};
 
 /// World-frame geometry of a joint at given poses.
 #[derive(Debug, Clone, Copy)]
@@ -260,13 +237,13 @@ pub(crate) fn push_joint_rows(joint: &Joint, a: &Side, b: &Side, h: f64, out: &m
 
 #[cfg(test)]
 mod tests {
-    use nalgebra::{Isometry3, Translation3};
+    use nalgebra::{Isometry3, Translation3, UnitQuaternion};
     use rand::{RngExt, SeedableRng};
     use rand_chacha::ChaCha8Rng;
 
     use super::*;
-    use crate::dynamics::body::BodyId;
-    use crate::dynamics::joint::{DEFAULT_COMPLIANCE, JOINT_SLOTS, JointId};
+    use crate::dynamics::ids::{BodyId, JointId};
+    use crate::dynamics::joint::{DEFAULT_COMPLIANCE, JOINT_SLOTS};
     use crate::dynamics::motor::{JointLimit, JointMotor};
 
     fn joint(kind: JointKind, fa: Isometry3<f64>, fb: Isometry3<f64>) -> Joint {

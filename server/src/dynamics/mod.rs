@@ -18,30 +18,39 @@
 //! large enough to make the step unstable get the joints' geometric stiffness in their effective
 //! mass, `M̃ = M + h² K̃` (`geometric_stiffness.rs`), in place of `M` above.
 //!
-//! | file | concept |
-//! |---|---|
-//! | `body.rs` | rigid bodies: mass properties, kinds, damping, state, builder and validation |
-//! | `force.rs` | applied-force elements (spring–damper; gravity is a world setting) |
-//! | `buoyancy.rs` | hydrostatic buoyancy and drag on sample points, water plane with waves |
-//! | `joint.rs` | joint models: kinds, frames, compliance, stabilization |
-//! | `motor.rs` | free axes, limits, velocity and position-target motors |
-//! | `coupling.rs` | powertrain couplings: gear pairs, differentials, clutches |
-//! | `chain.rs` | chain/cable helper: segments joined by ball joints |
-//! | `contact/` | colliders, broad and narrow phase (parry3d-f64), contact and friction rows |
-//! | `rows.rs` | the constraint row handed to the assembly; the row equation and its signs |
-//! | `joint_rows.rs` | joint → rows: violations and Jacobians of each joint kind |
-//! | `coupling_rows.rs` | coupling → its velocity row on up to four bodies |
-//! | `island.rs` | union–find islands over dynamic bodies |
-//! | `geometric_stiffness.rs` | geometric stiffness of loaded joints: `M̃ = M + h² K̃` per body |
-//! | `assemble.rs` | per-island `A`, `b` from body blocks; `v⁺ = v_free + M⁻¹Jᵀλ` |
-//! | `step.rs` | the time step and its integrator |
-//! | `projection.rs` | optional position projection (post-stabilization) |
-//! | `control.rs` | live model changes: latching/releasing joints, capturing island problems |
-//! | `world.rs` | the world: settings (and the projection default), adding and validating items, controls |
-//! | `query.rs` | read access: coordinates, impulses, reactions, islands, momentum |
-//! | `stats.rs` | per-island statistics of a step |
-//! | `watchdog.rs` | instability watchdog: energy gain beyond the inputs' work, speed bound |
-//! | `error.rs` | typed errors, one enum per operation |
+//! The files come in four layers, each importing only from the layers before it: the model (what
+//! the items *are*), their rows (what they hand the solver), the step's pipeline (islands, assembly,
+//! the stages of a step) and the world (the items together, the step run on them, the API).
+//!
+//! | layer | file | concept |
+//! |---|---|---|
+//! | model | `ids.rs` | stable ids of bodies, joints, couplings, force elements and colliders |
+//! | | `error.rs` | typed errors, one enum per operation |
+//! | | `body.rs` | rigid bodies: mass properties, kinds, damping, state, builder and validation |
+//! | | `motor.rs` | free axes, limits, velocity and position-target motors |
+//! | | `joint.rs` | joint models: kinds, frames, compliance, stabilization |
+//! | | `coupling.rs` | powertrain couplings: gear pairs, differentials, clutches |
+//! | | `force.rs` | applied-force elements (spring–damper; gravity is a world setting) |
+//! | | `buoyancy.rs` | hydrostatic buoyancy and drag on sample points, water plane with waves |
+//! | | `accumulator.rs` | per-body sums of a step's applied forces and their Jacobians |
+//! | | `settings.rs` | world settings (and the projection default), the geometric-stiffness modes |
+//! | rows | `rows.rs` | the constraint row handed to the assembly, its key and warm-start record; the row equation and its signs |
+//! | | `joint_rows.rs` | joint → rows: violations and Jacobians of each joint kind |
+//! | | `coupling_rows.rs` | coupling → its velocity row on up to four bodies |
+//! | | `force_rows.rs` | spring–damper → its implicit force row |
+//! | | `contact/` | colliders, broad and narrow phase (parry3d-f64), contact and friction rows |
+//! | pipeline | `island.rs` | union–find islands over dynamic bodies |
+//! | | `geometric_stiffness.rs` | geometric stiffness of loaded joints: `M̃ = M + h² K̃` per body |
+//! | | `assemble.rs` | per-island `A`, `b` from body blocks; `v⁺ = v_free + M⁻¹Jᵀλ` |
+//! | | `stats.rs` | per-island statistics of a step |
+//! | | `step.rs` | the stages of a time step and its integrator, on reusable buffers |
+//! | | `projection.rs` | optional position projection (post-stabilization) |
+//! | world | `world/mod.rs` | the world: adding and validating items, controls, the step |
+//! | | `world/query.rs` | read access: coordinates, impulses, reactions, islands, momentum |
+//! | | `world/control.rs` | live model changes: latching/releasing joints, capturing island problems |
+//! | | `world/colliders.rs` | colliders, the friction table, contact settings, the last step's contacts |
+//! | | `chain.rs` | chain/cable helper: segments joined by ball joints |
+//! | | `watchdog.rs` | instability watchdog: energy gain beyond the inputs' work, speed bound |
 //!
 //! Conventions: SI units, z up, f64 throughout; a body's frame has its origin at the centre of mass;
 //! velocities are world-frame; a joint's free coordinate is that of body A relative to body B (B the
@@ -68,53 +77,54 @@
 //!
 //! The solver never imports this module.
 
+mod accumulator;
 mod assemble;
 mod body;
 mod buoyancy;
 mod chain;
 mod contact;
-mod control;
 mod coupling;
 mod coupling_rows;
 mod error;
 mod force;
+mod force_rows;
 mod geometric_stiffness;
+mod ids;
 mod island;
 mod joint;
 mod joint_rows;
 mod motor;
 mod projection;
-mod query;
 mod rows;
+mod settings;
 mod stats;
 mod step;
 mod watchdog;
 mod world;
 
 pub use body::{
-    BodyBuilder, BodyId, BodyKind, RigidBody, box_inertia, capsule_inertia, cylinder_inertia, sphere_inertia,
+    BodyBuilder, BodyKind, RigidBody, box_inertia, capsule_inertia, cylinder_inertia, sphere_inertia,
 };
 pub use buoyancy::{Buoyancy, BuoyancyPoint, Water, Wave};
 pub use chain::{Chain, ChainBuilder, ChainEnd, ChainShape, steel_rope_mass_per_metre};
 pub use contact::{
-    Bounds, Collider, ColliderBuilder, ColliderId, CollisionGroups, ContactError, ContactReport,
-    ContactSettings, DEFAULT_CONTACT_COMPLIANCE, DEFAULT_MATERIAL, MAX_TERRAIN_TRIANGLES, Material, Shape,
-    SweepAndPrune, terrain,
+    Bounds, Collider, ColliderBuilder, CollisionGroups, ContactError, ContactReport, ContactSettings,
+    DEFAULT_CONTACT_COMPLIANCE, DEFAULT_MATERIAL, MAX_TERRAIN_TRIANGLES, Material, Shape, SweepAndPrune,
+    terrain,
 };
-pub use coupling::{Coupling, CouplingBuilder, CouplingId, CouplingKind};
+pub use coupling::{Coupling, CouplingBuilder, CouplingKind};
 pub use error::{
     BodyError, ChainError, ControlError, CouplingError, ForceError, JointError, ModelError, SettingsError,
     StateError, StepError,
 };
-pub use force::{ForceElement, ForceId, SpringDamper};
-pub use geometric_stiffness::{GeometricStiffness, RHO_START};
+pub use force::{ForceElement, SpringDamper};
+pub use geometric_stiffness::RHO_START;
+pub use ids::{BodyId, ColliderId, CouplingId, ForceId, JointId};
 pub use island::Islands;
-pub use joint::{
-    DEFAULT_COMPLIANCE, JOINT_SLOTS, Joint, JointBuilder, JointFrames, JointId, JointKind, JointRow,
-};
+pub use joint::{DEFAULT_COMPLIANCE, JOINT_SLOTS, Joint, JointBuilder, JointFrames, JointKind, JointRow};
 pub use motor::{DEFAULT_POSITION_GAIN, FreeAxis, JointLimit, JointMotor, MotorMode, wrap_angle};
-pub use query::{JointFramesWorld, JointReaction};
 pub use rows::{ConstraintRow, Jac6, MAX_ROW_BODIES, RowKey, RowKind};
+pub use settings::{GeometricStiffness, WorldSettings};
 pub use stats::IslandStats;
 pub use watchdog::{Instability, Watchdog, WatchdogSettings};
-pub use world::{World, WorldSettings};
+pub use world::{JointFramesWorld, JointReaction, World};

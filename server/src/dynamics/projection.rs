@@ -42,11 +42,12 @@ use nalgebra::{UnitQuaternion, Vector3};
 use super::assemble::BodyMotion;
 use super::body::RigidBody;
 use super::error::StepError;
+use super::ids::BodyId;
 use super::joint::Joint;
-use super::joint_rows::{Side, push_joint_rows};
-use super::rows::{RowKey, RowKind};
+use super::joint_rows::push_joint_rows;
+use super::rows::{RowKey, RowKind, Side};
+use super::settings::WorldSettings;
 use super::step::StepWorkspace;
-use super::world::WorldSettings;
 use crate::solver::Solver;
 
 /// Runs `settings.projection_iterations` projections on `ws.x_new`, `ws.q_new` (step `step`).
@@ -69,7 +70,7 @@ pub(crate) fn project(
             }
             ws.proj_motion.push(m);
         }
-        let side = |id: Option<super::BodyId>, ws: &StepWorkspace| match id {
+        let side = |id: Option<BodyId>, ws: &StepWorkspace| match id {
             None => Side::world(),
             Some(id) => Side {
                 index: Some(id.index()),

@@ -1,5 +1,5 @@
-//! Constraint rows: what the models (joints, couplings and spring–dampers now, contacts later) hand
-//! to the island assembly.
+//! Constraint rows: what the models (joints, couplings, spring–dampers and contacts) hand to the
+//! island assembly.
 //!
 //! **One row** `i` couples up to [`MAX_ROW_BODIES`] = 4 bodies `k` through Jacobian blocks
 //! `J_{i,k} ∈ ℝ^{1×6}` (linear part, angular part; world frame), so that
@@ -38,14 +38,16 @@
 //! `+J_{i,k}`; a row of a joint pulls the two bodies with equal and opposite forces at one point (see
 //! `joint_rows.rs`), so constraint impulses conserve linear and angular momentum.
 
-use nalgebra::Vector3;
+use nalgebra::{UnitQuaternion, Vector3};
 
-use super::coupling::CouplingId;
-use super::force::ForceId;
-use super::joint::{JointId, JointRow};
+use super::coupling::MAX_COUPLING_BODIES;
+use super::ids::{CouplingId, ForceId, JointId};
+use super::joint::JointRow;
+use crate::solver::IndexState;
 
-/// Most bodies one row touches (a differential couples three shafts hinged to one housing).
-pub const MAX_ROW_BODIES: usize = 4;
+/// Most bodies one row touches: a coupling's row (a differential couples three shafts hinged to
+/// one housing); joint, spring and contact rows touch two.
+pub const MAX_ROW_BODIES: usize = MAX_COUPLING_BODIES;
 
 /// Jacobian block of one row on one body: `J v = lin · v + ang · ω`.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
@@ -115,6 +117,16 @@ pub enum RowKey {
         /// 0: normal; 1, 2: friction along `t₁`, `t₂`.
         row: u8,
     },
+}
+
+/// What persists of a row under its [`RowKey`] (a joint's slot, a coupling, a spring, a contact): the
+/// index state and impulse of the step it was last solved in (warm start, reporting).
+#[derive(Debug, Clone, Copy, Default)]
+pub(crate) struct WarmRow {
+    /// `World::steps` after the step that wrote it.
+    pub stamp: u64,
+    pub state: IndexState,
+    pub lambda: f64,
 }
 
 /// One constraint row (solver side). Body indices are world body indices; a `None` entry of
@@ -212,5 +224,29 @@ impl ConstraintRow {
     #[inline]
     pub fn velocity(&self, v: &[Vector3<f64>], w: &[Vector3<f64>]) -> f64 {
         self.blocks().map(|(b, j)| j.dot(&v[b], &w[b])).sum()
+    }
+}
+
+/// Pose and velocity of one end of a two-body row: a joint's, a coupling shaft's or a spring's body
+/// at the poses the rows are built at (`index: None` is the world frame, at rest).
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Side {
+    pub index: Option<usize>,
+    pub x: Vector3<f64>,
+    pub q: UnitQuaternion<f64>,
+    pub v: Vector3<f64>,
+    pub w: Vector3<f64>,
+}
+
+impl Side {
+    /// The world frame.
+    pub fn world() -> Self {
+        Side {
+            index: None,
+            x: Vector3::zeros(),
+            q: UnitQuaternion::identity(),
+            v: Vector3::zeros(),
+            w: Vector3::zeros(),
+        }
     }
 }

@@ -12,7 +12,7 @@
 //!      stiffness from the previous step's impulses) and h τ → h τ − α h² K̃ ω₀ (the implicit
 //!      mode; geometric_stiffness.rs, eq. G2–G4): M̃ replaces M in steps 5–6
 //!   3. rows of every joint, coupling and spring at the current poses
-//!                                                      (joint_rows.rs, coupling_rows.rs, force.rs)
+//!                                                 (joint_rows.rs, coupling_rows.rs, force_rows.rs)
 //!      then of every contact point (contact/)
 //!   4. islands by union–find over rows joining dynamic bodies
 //!   5. per island: A = J M̃⁻¹ Jᵀ + C/h², b = r − J v_free (eq. 2); solve the boxed MLCP (eq. 3)
@@ -21,6 +21,11 @@
 //!   7. x⁺ = x + h v⁺,   q⁺ = normalize(exp(h ω⁺/2) ⊗ q)  (ω world frame; = q ⊗ exp(h ω_body/2))
 //!   8. optional position projection (projection.rs), then commit
 //! ```
+//!
+//! Each stage is a method of [`StepWorkspace`] over the world's items: `prepare_bodies` (1–2),
+//! `push_rows` (3–4), `solve_islands` (5–6), `integrate` (7), `commit` (8);
+//! [`World::step`](super::World::step) runs them in this order, with the projection between the
+//! last two.
 //!
 //! This is the paper's single-step implicit Euler: velocities from the implicit constraint impulses,
 //! positions from the new velocities (symplectic in the unconstrained case: free fall gives
@@ -53,29 +58,24 @@ use std::time::Instant;
 
 use nalgebra::{Matrix3, Matrix6, UnitQuaternion, Vector3, Vector6};
 
+use super::accumulator::ForceAccumulator;
 use super::assemble::{Assembler, BodyMotion};
 use super::body::{BodyKind, RigidBody};
+use super::contact::ContactSet;
+use super::coupling::Coupling;
 use super::coupling_rows::push_coupling_row;
 use super::error::StepError;
-use super::force::{ForceAccumulator, ForceElement, ForceId};
-use super::geometric_stiffness::{self, GeometricStiffness};
+use super::force::ForceElement;
+use super::force_rows::push_spring_row;
+use super::geometric_stiffness;
+use super::ids::{BodyId, ForceId};
 use super::island::Islands;
-use super::joint::JOINT_SLOTS;
-use super::joint_rows::{Side, push_joint_rows};
-use super::rows::{ConstraintRow, RowKey, RowKind};
+use super::joint::{JOINT_SLOTS, Joint};
+use super::joint_rows::push_joint_rows;
+use super::rows::{ConstraintRow, RowKey, RowKind, Side, WarmRow};
+use super::settings::{GeometricStiffness, WorldSettings};
 use super::stats::IslandStats;
-use super::world::{World, WorldSettings};
 use crate::solver::{IndexState, Mlcp, Solver};
-
-/// Persistent state of one row (a joint's slot or a coupling): index state and impulse of the step
-/// it was last solved in.
-#[derive(Debug, Clone, Copy, Default)]
-pub(crate) struct WarmRow {
-    /// `World::steps` after the step that wrote it.
-    pub stamp: u64,
-    pub state: IndexState,
-    pub lambda: f64,
-}
 
 /// Reusable buffers of the step.
 #[derive(Debug, Default)]
@@ -181,7 +181,7 @@ fn implicit_change(
 const GYRO_ITERATIONS: usize = 8;
 
 /// Side of a joint at the current poses with the velocities `(v[i], w[i])`.
-fn side_of(bodies: &[RigidBody], v: &[Vector3<f64>], w: &[Vector3<f64>], id: Option<super::BodyId>) -> Side {
+fn side_of(bodies: &[RigidBody], v: &[Vector3<f64>], w: &[Vector3<f64>], id: Option<BodyId>) -> Side {
     match id {
         None => Side::world(),
         Some(id) => {
@@ -203,12 +203,12 @@ impl StepWorkspace {
     }
 
     /// Forces, free velocities and predicted velocities of every body (steps 1–2).
-    fn prepare_bodies(
+    pub fn prepare_bodies(
         &mut self,
         settings: &WorldSettings,
         bodies: &[RigidBody],
-        joints: &[super::Joint],
-        forces: &[super::ForceElement],
+        joints: &[Joint],
+        forces: &[ForceElement],
         time: f64,
         step: u64,
     ) {
@@ -367,104 +367,112 @@ impl StepWorkspace {
         }
         Ok(())
     }
-}
 
-impl World {
-    /// Advances the world by one time step `h`.
-    pub fn step(&mut self) -> Result<(), StepError> {
-        let h = self.settings.timestep;
-        let ws = &mut self.ws;
-        ws.prepare_bodies(&self.settings, &self.bodies, &self.joints, &self.forces, self.time, self.steps);
-
-        // 3–4. Rows and islands.
-        ws.rows.clear();
-        for j in self.joints.iter().filter(|j| j.enabled) {
-            let a = side_of(&self.bodies, &ws.v_new, &ws.w_new, Some(j.body_a));
-            let b = side_of(&self.bodies, &ws.v_new, &ws.w_new, j.body_b);
-            push_joint_rows(j, &a, &b, h, &mut ws.rows);
+    /// Rows of every enabled joint, coupling, spring and contact point at the current poses with
+    /// the free velocities, and the islands they make (steps 3–4).
+    pub fn push_rows(
+        &mut self,
+        h: f64,
+        bodies: &[RigidBody],
+        joints: &[Joint],
+        couplings: &[Coupling],
+        forces: &[ForceElement],
+        contacts: &mut ContactSet,
+    ) {
+        let (v, w) = (&self.v_new, &self.w_new);
+        self.rows.clear();
+        for j in joints.iter().filter(|j| j.enabled) {
+            let a = side_of(bodies, v, w, Some(j.body_a));
+            let b = side_of(bodies, v, w, j.body_b);
+            push_joint_rows(j, &a, &b, h, &mut self.rows);
         }
-        for c in &self.couplings {
-            let (bodies, v, w) = (&self.bodies, &ws.v_new, &ws.w_new);
-            let sides =
-                |j: &super::Joint| (side_of(bodies, v, w, Some(j.body_a)), side_of(bodies, v, w, j.body_b));
-            push_coupling_row(c, &self.joints, sides, h, &mut ws.rows);
+        for c in couplings {
+            let sides = |j: &Joint| (side_of(bodies, v, w, Some(j.body_a)), side_of(bodies, v, w, j.body_b));
+            push_coupling_row(c, joints, sides, h, &mut self.rows);
         }
-        for (i, f) in self.forces.iter().enumerate() {
+        for (i, f) in forces.iter().enumerate() {
             if let ForceElement::SpringDamper(s) = f {
-                let a = side_of(&self.bodies, &ws.v_new, &ws.w_new, Some(s.body_a));
-                let b = side_of(&self.bodies, &ws.v_new, &ws.w_new, s.body_b);
-                s.push_row(ForceId(i as u32), &a, &b, h, &mut ws.rows);
+                let a = side_of(bodies, v, w, Some(s.body_a));
+                let b = side_of(bodies, v, w, s.body_b);
+                push_spring_row(s, ForceId(i as u32), &a, &b, h, &mut self.rows);
             }
         }
-        self.contacts.push_rows(&self.bodies, &self.joints, h, &mut ws.rows);
-        ws.islands.build(&ws.dynamic, &ws.rows);
-        ws.warm.resize(self.joints.len(), [WarmRow::default(); JOINT_SLOTS]);
-        ws.warm_couplings.resize(self.couplings.len(), WarmRow::default());
-        ws.warm_forces.resize(self.forces.len(), WarmRow::default());
+        contacts.push_rows(bodies, joints, h, &mut self.rows);
+        self.islands.build(&self.dynamic, &self.rows);
+        self.warm.resize(joints.len(), [WarmRow::default(); JOINT_SLOTS]);
+        self.warm_couplings.resize(couplings.len(), WarmRow::default());
+        self.warm_forces.resize(forces.len(), WarmRow::default());
+    }
 
-        // 5–6. One MLCP per island; v⁺ = v_free + M⁻¹ Jᵀ λ (bodies without rows keep v_free).
-        ws.stats.clear();
-        ws.captured.clear();
-        ws.stat_of_island.clear();
-        ws.stat_of_island.resize(ws.islands.len(), usize::MAX);
-        // The time budget of the step's solves (`max_solve_us`) is shared by all its islands.
-        let deadline = self.settings.solver.max_solve_us.and_then(|us| {
+    /// One MLCP per island with rows, `v⁺ = v_free + M⁻¹ Jᵀ λ` (steps 5–6; bodies without rows keep
+    /// `v_free`); the islands share the time budget of the step's solves (`max_solve_us`). Contact
+    /// rows not solved in this step leave the warm-start cache.
+    pub fn solve_islands(&mut self, settings: &WorldSettings, step: u64) -> Result<(), StepError> {
+        self.stats.clear();
+        self.captured.clear();
+        self.stat_of_island.clear();
+        self.stat_of_island.resize(self.islands.len(), usize::MAX);
+        let deadline = settings.solver.max_solve_us.and_then(|us| {
             Instant::now().checked_add(std::time::Duration::try_from_secs_f64(us * 1e-6).ok()?)
         });
-        for k in 0..ws.islands.len() {
-            if !ws.islands.rows(k).is_empty() {
-                ws.solve_island(&self.settings, k, self.steps, deadline)?;
+        for k in 0..self.islands.len() {
+            if !self.islands.rows(k).is_empty() {
+                self.solve_island(settings, k, step, deadline)?;
             }
         }
-        let solved = self.steps + 1;
-        ws.warm_contacts.retain(|_, w| w.stamp == solved);
+        let solved = step + 1;
+        self.warm_contacts.retain(|_, w| w.stamp == solved);
+        Ok(())
+    }
 
-        // 7. Integration.
-        ws.x_new.clear();
-        ws.q_new.clear();
-        for (i, b) in self.bodies.iter().enumerate() {
+    /// The new poses `x⁺`, `q⁺` from `v⁺` (step 7), and the work of the applied forces other than
+    /// gravity (buoyancy, drag, force elements) over the step.
+    pub fn integrate(&mut self, settings: &WorldSettings, bodies: &[RigidBody]) {
+        let h = settings.timestep;
+        self.x_new.clear();
+        self.q_new.clear();
+        for (i, b) in bodies.iter().enumerate() {
             if b.kind() == BodyKind::Static {
-                ws.x_new.push(b.position);
-                ws.q_new.push(b.orientation);
+                self.x_new.push(b.position);
+                self.q_new.push(b.orientation);
                 continue;
             }
-            ws.x_new.push(b.position + ws.v_new[i] * h);
-            let q = UnitQuaternion::from_scaled_axis(ws.w_new[i] * h) * b.orientation;
-            ws.q_new.push(UnitQuaternion::new_normalize(q.into_inner()));
+            self.x_new.push(b.position + self.v_new[i] * h);
+            let q = UnitQuaternion::from_scaled_axis(self.w_new[i] * h) * b.orientation;
+            self.q_new.push(UnitQuaternion::new_normalize(q.into_inner()));
         }
-
-        // Work of applied forces other than gravity (buoyancy, drag, force elements) over the step.
-        for (i, b) in self.bodies.iter().enumerate().filter(|(_, b)| b.is_dynamic()) {
-            let f = ws.forces.force[i] - self.settings.gravity * b.mass();
-            let w = h * (f.dot(&ws.v_new[i]) + ws.forces.torque[i].dot(&ws.w_new[i]));
+        for (i, b) in bodies.iter().enumerate().filter(|(_, b)| b.is_dynamic()) {
+            let f = self.forces.force[i] - settings.gravity * b.mass();
+            let w = h * (f.dot(&self.v_new[i]) + self.forces.torque[i].dot(&self.w_new[i]));
             if w.is_finite() {
-                ws.input_work += w;
+                self.input_work += w;
             }
         }
+    }
 
-        // 8. Position projection, finiteness check, commit.
-        if self.settings.projection_iterations > 0 {
-            super::projection::project(&self.settings, &self.bodies, &self.joints, ws, self.steps)?;
-        }
-        for (i, b) in self.bodies.iter().enumerate() {
-            let ok =
-                ws.v_new[i].iter().chain(ws.w_new[i].iter()).chain(ws.x_new[i].iter()).all(|c| c.is_finite())
-                    && ws.q_new[i].coords.iter().all(|c| c.is_finite());
+    /// Writes the new state into the bodies (step 8, after the optional projection), or nothing
+    /// with [`StepError::NonFinite`] if any of it is not finite.
+    pub fn commit(&self, bodies: &mut [RigidBody]) -> Result<(), StepError> {
+        for (i, b) in bodies.iter().enumerate() {
+            let ok = self.v_new[i]
+                .iter()
+                .chain(self.w_new[i].iter())
+                .chain(self.x_new[i].iter())
+                .all(|c| c.is_finite())
+                && self.q_new[i].coords.iter().all(|c| c.is_finite());
             if !ok {
                 return Err(StepError::NonFinite { body: b.name().to_string() });
             }
         }
-        for (i, b) in self.bodies.iter_mut().enumerate() {
+        for (i, b) in bodies.iter_mut().enumerate() {
             if b.kind() == BodyKind::Static {
                 continue;
             }
-            b.position = ws.x_new[i];
-            b.orientation = ws.q_new[i];
-            b.linvel = ws.v_new[i];
-            b.angvel = ws.w_new[i];
+            b.position = self.x_new[i];
+            b.orientation = self.q_new[i];
+            b.linvel = self.v_new[i];
+            b.angvel = self.w_new[i];
         }
-        self.time += h;
-        self.steps += 1;
         Ok(())
     }
 }

@@ -46,7 +46,8 @@
 //! **Friction** (`material.rs`). Colliders carry a material name ([`ColliderBuilder::material_name`],
 //! default [`DEFAULT_MATERIAL`], interned to a small id) and a per-collider
 //! [`Material::friction`] (default 1.0). `μ` of a pair, first match wins: the pair's own
-//! ([`World::set_pair_friction`]); the material-pair table ([`World::set_material_friction`],
+//! ([`World::set_pair_friction`](super::World::set_pair_friction)); the material-pair table
+//! ([`World::set_material_friction`](super::World::set_material_friction),
 //! symmetric, a material with itself included); the geometric mean `√(μ_A μ_B)` of the colliders'.
 //!
 //! **Compliance.** Normal and friction rows carry [`ContactSettings::compliance`] (default 1e-10 m/N,
@@ -137,24 +138,13 @@ pub use broad::{Bounds, SweepAndPrune};
 pub use material::DEFAULT_MATERIAL;
 pub use shape::{MAX_TERRAIN_TRIANGLES, Shape};
 
-use super::body::{BodyId, RigidBody};
+use super::body::{BodyKind, RigidBody};
+use super::ids::{BodyId, ColliderId};
 use super::joint::Joint;
-use super::rows::{ConstraintRow, RowKey};
-use super::world::World;
+use super::rows::ConstraintRow;
 
 /// Default compliance of contact rows (m/N), as joints'.
 pub const DEFAULT_CONTACT_COMPLIANCE: f64 = 1e-10;
-
-/// Id of a collider (index in creation order).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
-pub struct ColliderId(pub u32);
-
-impl ColliderId {
-    /// Index in the world's collider list.
-    pub fn index(self) -> usize {
-        self.0 as usize
-    }
-}
 
 /// Surface material.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -438,7 +428,8 @@ impl ColliderBuilder {
         }
     }
     /// The material name (non-empty), the key of the material-pair friction table
-    /// ([`World::set_material_friction`]); default [`DEFAULT_MATERIAL`].
+    /// ([`World::set_material_friction`](super::World::set_material_friction)); default
+    /// [`DEFAULT_MATERIAL`].
     pub fn material_name(mut self, name: &str) -> Self {
         self.material_name = name.to_string();
         self
@@ -462,6 +453,56 @@ impl ColliderBuilder {
     pub fn groups(mut self, groups: CollisionGroups) -> Self {
         self.groups = groups;
         self
+    }
+    /// The name.
+    pub fn name(&self) -> &str {
+        &self.name
+    }
+
+    /// The collider, validated against the world's `bodies` (degenerate shapes are refused with a
+    /// typed error), its material name interned in `materials`. Called by
+    /// [`World::add_collider`](super::World::add_collider), which checks first that the name is new.
+    pub(crate) fn build(
+        self,
+        bodies: &[RigidBody],
+        materials: &mut material::Materials,
+    ) -> Result<Collider, ContactError> {
+        let name = || self.name.clone();
+        if self.name.is_empty() {
+            return Err(ContactError::EmptyName);
+        }
+        let body = bodies
+            .get(self.body.index())
+            .ok_or(ContactError::UnknownBody { collider: name(), body: self.body })?;
+        if self.shape.is_unbounded() && body.is_dynamic() {
+            return Err(ContactError::UnboundedOnDynamic { collider: name(), shape: self.shape.kind_name() });
+        }
+        if self.shape.is_terrain() && body.kind() != BodyKind::Static {
+            return Err(ContactError::TerrainNotStatic { collider: name(), shape: self.shape.kind_name() });
+        }
+        if self.material_name.is_empty() {
+            return Err(ContactError::EmptyMaterialName);
+        }
+        let mu = self.material.friction;
+        if !(mu.is_finite() && mu >= 0.0) {
+            return Err(ContactError::InvalidFriction { collider: name(), value: mu });
+        }
+        if !shape::valid_isometry(&self.offset) {
+            return Err(ContactError::InvalidOffset { collider: name() });
+        }
+        let parts = self.shape.build_parts(&self.name, &self.offset)?;
+        let material_id = materials.intern(&self.material_name);
+        Ok(Collider {
+            name: self.name,
+            body: self.body,
+            shape: self.shape,
+            material: self.material,
+            material_id,
+            material_name: self.material_name,
+            groups: self.groups,
+            parts,
+            offset: self.offset,
+        })
     }
 }
 
@@ -530,6 +571,11 @@ pub(crate) struct ContactSet {
 }
 
 impl ContactSet {
+    /// The friction coefficient of the colliders `a` and `b` (indices; `material.rs`).
+    pub fn pair_mu(&self, a: usize, b: usize) -> f64 {
+        material::pair_mu(&self.colliders, &self.pair_friction, &self.materials, a, b)
+    }
+
     /// The step's hook: finds the contact points at the current poses and appends their rows.
     pub fn push_rows(
         &mut self,
@@ -575,202 +621,4 @@ pub struct ContactReport {
     pub friction_impulse: [f64; 2],
     /// The tangent basis used.
     pub tangents: [Vector3<f64>; 2],
-}
-
-impl World {
-    /// Adds a collider (validated; degenerate shapes are refused with a typed error).
-    pub fn add_collider(&mut self, cb: ColliderBuilder) -> Result<ColliderId, ContactError> {
-        let name = || cb.name.clone();
-        if cb.name.is_empty() {
-            return Err(ContactError::EmptyName);
-        }
-        if self.contacts.names.contains_key(&cb.name) {
-            return Err(ContactError::DuplicateName { collider: name() });
-        }
-        let body = self
-            .bodies
-            .get(cb.body.index())
-            .ok_or(ContactError::UnknownBody { collider: name(), body: cb.body })?;
-        if cb.shape.is_unbounded() && body.is_dynamic() {
-            return Err(ContactError::UnboundedOnDynamic { collider: name(), shape: cb.shape.kind_name() });
-        }
-        if cb.shape.is_terrain() && body.kind() != super::body::BodyKind::Static {
-            return Err(ContactError::TerrainNotStatic { collider: name(), shape: cb.shape.kind_name() });
-        }
-        if cb.material_name.is_empty() {
-            return Err(ContactError::EmptyMaterialName);
-        }
-        let mu = cb.material.friction;
-        if !(mu.is_finite() && mu >= 0.0) {
-            return Err(ContactError::InvalidFriction { collider: name(), value: mu });
-        }
-        if !shape::valid_isometry(&cb.offset) {
-            return Err(ContactError::InvalidOffset { collider: name() });
-        }
-        let parts = cb.shape.build_parts(&cb.name, &cb.offset)?;
-        let id = ColliderId(self.contacts.colliders.len() as u32);
-        self.contacts.names.insert(cb.name.clone(), id);
-        let material_id = self.contacts.materials.intern(&cb.material_name);
-        self.contacts.colliders.push(Collider {
-            name: cb.name,
-            body: cb.body,
-            shape: cb.shape,
-            material: cb.material,
-            material_id,
-            material_name: cb.material_name,
-            groups: cb.groups,
-            parts,
-            offset: cb.offset,
-        });
-        Ok(id)
-    }
-
-    /// The colliders.
-    pub fn colliders(&self) -> &[Collider] {
-        &self.contacts.colliders
-    }
-
-    /// A collider by name.
-    pub fn collider_id(&self, name: &str) -> Option<ColliderId> {
-        self.contacts.names.get(name).copied()
-    }
-
-    /// Sets (`Some(μ)`) or clears (`None`: back to the geometric mean of the materials) the friction
-    /// coefficient of the pair `a`, `b`; it applies from the next step.
-    pub fn set_pair_friction(
-        &mut self,
-        a: ColliderId,
-        b: ColliderId,
-        mu: Option<f64>,
-    ) -> Result<(), ContactError> {
-        for id in [a, b] {
-            if id.index() >= self.contacts.colliders.len() {
-                return Err(ContactError::UnknownCollider(id));
-            }
-        }
-        let key = (a.0.min(b.0), a.0.max(b.0));
-        match mu {
-            Some(mu) if mu.is_finite() && mu >= 0.0 => {
-                self.contacts.pair_friction.insert(key, mu);
-            }
-            Some(mu) => {
-                let name = format!(
-                    "{}/{}",
-                    self.contacts.colliders[a.index()].name,
-                    self.contacts.colliders[b.index()].name
-                );
-                return Err(ContactError::InvalidFriction { collider: name, value: mu });
-            }
-            None => {
-                self.contacts.pair_friction.remove(&key);
-            }
-        }
-        Ok(())
-    }
-
-    /// Sets the friction coefficient of the material pair `a`, `b` (names, in either order; a
-    /// material with itself is a pair too); it applies from the next step to every collider pair
-    /// of these materials without a pair override. Precedence: [`World::set_pair_friction`] over
-    /// this table over the geometric mean of the colliders' [`Material::friction`].
-    pub fn set_material_friction(&mut self, a: &str, b: &str, mu: f64) -> Result<(), ContactError> {
-        if a.is_empty() || b.is_empty() {
-            return Err(ContactError::EmptyMaterialName);
-        }
-        if !(mu.is_finite() && mu >= 0.0) {
-            return Err(ContactError::InvalidMaterialFriction {
-                a: a.to_string(),
-                b: b.to_string(),
-                value: mu,
-            });
-        }
-        let (ia, ib) = (self.contacts.materials.intern(a), self.contacts.materials.intern(b));
-        self.contacts.materials.set(ia, ib, Some(mu));
-        Ok(())
-    }
-
-    /// Removes the material pair `a`, `b` from the friction table (no-op if absent).
-    pub fn clear_material_friction(&mut self, a: &str, b: &str) {
-        let m = &mut self.contacts.materials;
-        if let (Some(ia), Some(ib)) = (m.id(a), m.id(b)) {
-            m.set(ia, ib, None);
-        }
-    }
-
-    /// The friction table's entry for the material pair `a`, `b`, if any.
-    pub fn material_friction(&self, a: &str, b: &str) -> Option<f64> {
-        let m = &self.contacts.materials;
-        m.get(m.id(a)?, m.id(b)?)
-    }
-
-    /// The friction coefficient the colliders `a` and `b` get when they touch (pair override,
-    /// else material-pair table, else geometric mean: [`World::set_material_friction`]).
-    pub fn pair_friction(&self, a: ColliderId, b: ColliderId) -> Result<f64, ContactError> {
-        for id in [a, b] {
-            if id.index() >= self.contacts.colliders.len() {
-                return Err(ContactError::UnknownCollider(id));
-            }
-        }
-        let c = &self.contacts;
-        Ok(material::pair_mu(&c.colliders, &c.pair_friction, &c.materials, a.index(), b.index()))
-    }
-
-    /// Changes a collider's collision groups; it applies from the next step.
-    pub fn set_collision_groups(
-        &mut self,
-        id: ColliderId,
-        groups: CollisionGroups,
-    ) -> Result<(), ContactError> {
-        let c = self.contacts.colliders.get_mut(id.index()).ok_or(ContactError::UnknownCollider(id))?;
-        c.groups = groups;
-        Ok(())
-    }
-
-    /// Contact settings.
-    pub fn contact_settings(&self) -> ContactSettings {
-        self.contacts.settings
-    }
-
-    /// Changes the contact settings (validated).
-    pub fn set_contact_settings(&mut self, s: ContactSettings) -> Result<(), ContactError> {
-        let bad = |what, value| Err(ContactError::InvalidSetting { what, value });
-        if !(s.margin.is_finite() && s.margin >= 0.0) {
-            return bad("margin", s.margin);
-        }
-        if !(s.compliance.is_finite() && s.compliance >= 0.0) {
-            return bad("compliance", s.compliance);
-        }
-        if !(s.stabilization > 0.0 && s.stabilization <= 1.0) {
-            return bad("stabilization", s.stabilization);
-        }
-        if !(s.sliding_speed.is_finite() && s.sliding_speed >= 0.0) {
-            return bad("sliding_speed", s.sliding_speed);
-        }
-        self.contacts.settings = s;
-        Ok(())
-    }
-
-    /// The contact points of the last step with their impulses (zero impulses before the first
-    /// step or for a point whose island was not solved).
-    pub fn contacts(&self) -> impl Iterator<Item = ContactReport> + '_ {
-        self.contacts.phase.points.iter().map(move |p| {
-            let lambda = |row: u8| {
-                let key = RowKey::Contact { colliders: [p.ca, p.cb], features: p.features, row };
-                self.ws
-                    .warm_row(key)
-                    .filter(|w| self.steps > 0 && w.stamp == self.steps)
-                    .map_or(0.0, |w| w.lambda)
-            };
-            ContactReport {
-                collider_a: ColliderId(p.ca),
-                collider_b: ColliderId(p.cb),
-                point_a: p.pa,
-                point_b: p.pb,
-                normal: p.n,
-                gap: p.dist,
-                normal_impulse: lambda(0),
-                friction_impulse: [lambda(1), lambda(2)],
-                tangents: p.t,
-            }
-        })
-    }
 }

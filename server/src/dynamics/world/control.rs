@@ -9,9 +9,9 @@
 
 use nalgebra::Isometry3;
 
-use super::error::ControlError;
-use super::joint::JointId;
-use super::world::World;
+use super::World;
+use crate::dynamics::error::ControlError;
+use crate::dynamics::ids::JointId;
 use crate::solver::Mlcp;
 
 impl World {

@@ -1,101 +1,35 @@
-//! The world: settings, bodies, joints, couplings and force elements with their validation, and the
-//! live control inputs. Read access is in `query.rs`, stepping in `step.rs`, the optional position
-//! projection in `projection.rs`, the chain helper in `chain.rs`.
+//! The world: its items (bodies, joints, couplings, force elements, colliders) with their
+//! validation, its settings and the live control inputs, and the step that runs the stages of
+//! `step.rs` on them. The rest of its API is in this folder: read access in `query.rs`, live model
+//! changes in `control.rs`, colliders and friction in `colliders.rs`. The settings are in
+//! `settings.rs`, the chain helper in `chain.rs`.
 //!
 //! Ids are indices in creation order and stay valid for the world's life (nothing is removed yet).
 //! Names are unique per kind of item and can be looked up.
-//!
-//! **Position projection — the default and its trade.** `projection_iterations` is 0 by default: the
-//! paper's formulation alone (eq. 1–3), one MLCP per island per step. Its velocity-level rows leave
-//! the chord error of integrating a rotation, `≈ (h ω)² r / 2` at an anchor at lever arm `r` (0.6 mm
-//! for a hinged plate swinging at 3 rad/s with `r = 0.8 m`, `h = 1/60`); the next step removes it,
-//! so it never accumulates, and joint *axes* (angular rows) hold to ~1e-9 regardless. With one
-//! projection iteration anchors hold to ~1e-8 m (the drift bound of 1e-6 m over 20 s is met
-//! only with it, `tests/dynamics_joint_drift.rs`), at the price of a second solve per island and
-//! step and of dissipation at fast relative rotations (a free-floating chain spinning at 1–3 rad/s
-//! loses 22 % of its angular momentum over 10 s, against 0.9 % without; a slow pendulum 0.13 % of
-//! its amplitude over 10 periods). We keep the paper's formulation as the default — conservation and
-//! cost over sub-millimetre gaps — and recommend `projection_iterations = 1` for machines whose
-//! joints must not visibly open (fast linkages, long booms).
+
+mod colliders;
+mod control;
+mod query;
+
+pub use query::{JointFramesWorld, JointReaction};
 
 use std::collections::HashMap;
 
 use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
 
-use super::body::{BodyBuilder, BodyId, BodyKind, RigidBody};
+use super::body::{self, BodyBuilder, BodyKind, RigidBody};
 use super::contact::ContactSet;
-use super::coupling::{Coupling, CouplingBuilder, CouplingId, validate_max_torque};
+use super::coupling::{Coupling, CouplingBuilder, validate_max_torque};
 use super::error::{
-    BodyError, ControlError, CouplingError, ForceError, JointError, SettingsError, StateError,
+    BodyError, ControlError, CouplingError, ForceError, JointError, SettingsError, StateError, StepError,
 };
-use super::force::{ForceElement, ForceId};
-use super::geometric_stiffness::GeometricStiffness;
-use super::joint::{Joint, JointBuilder, JointFrames, JointId, JointKind};
+use super::force::ForceElement;
+use super::ids::{BodyId, CouplingId, ForceId, JointId};
+use super::joint::{Joint, JointBuilder, JointFrames, JointKind};
 use super::motor::{FreeAxis, JointMotor};
+use super::projection::project;
+use super::settings::WorldSettings;
 use super::step::StepWorkspace;
-use crate::solver::SolverOptions;
-
-/// Settings of a [`World`].
-#[derive(Debug, Clone, Copy)]
-pub struct WorldSettings {
-    /// Time step `h` (s); paper: 1/60.
-    pub timestep: f64,
-    /// Gravity (m/s²); z up.
-    pub gravity: Vector3<f64>,
-    /// Solver options of every island (variant default [`Variant::Skyline`](crate::solver::Variant)).
-    pub solver: SolverOptions,
-    /// Gyroscopic term: torque-free rotation that conserves angular momentum (see `step.rs`); off:
-    /// `ω` carried over unchanged.
-    pub gyroscopic: bool,
-    /// Warm-start each island from the previous step's index set and impulses of persistent rows.
-    pub warm_start: bool,
-    /// Position projection (post-stabilization, `projection.rs`) iterations after the velocity
-    /// step; 0 (default) = the paper's formulation alone, which leaves an `O((hω)² r)` anchor error
-    /// at every step end. 1 removes that error to ~1e-8 m but costs a second solve per step and
-    /// dissipates energy at fast rotations (module doc).
-    pub projection_iterations: usize,
-    /// Geometric stiffness of loaded joints (`geometric_stiffness.rs`): implicit by default (it
-    /// only acts on bodies whose joint loads make the step unstable); `Off` is the paper's step as
-    /// published.
-    pub geometric_stiffness: GeometricStiffness,
-}
-
-impl Default for WorldSettings {
-    fn default() -> Self {
-        WorldSettings {
-            timestep: 1.0 / 60.0,
-            gravity: Vector3::new(0.0, 0.0, -9.81),
-            solver: SolverOptions::default(),
-            gyroscopic: true,
-            warm_start: true,
-            projection_iterations: 0,
-            geometric_stiffness: GeometricStiffness::Implicit,
-        }
-    }
-}
-
-impl WorldSettings {
-    fn validate(&self) -> Result<(), SettingsError> {
-        if !(self.timestep.is_finite() && self.timestep > 0.0) {
-            return Err(SettingsError::InvalidTimestep(self.timestep));
-        }
-        if !self.gravity.iter().all(|g| g.is_finite()) {
-            return Err(SettingsError::NonFiniteGravity(self.gravity.into()));
-        }
-        if let Some(us) = self.solver.max_solve_us
-            && !(us.is_finite() && us > 0.0)
-        {
-            return Err(SettingsError::InvalidSolveBudget(us));
-        }
-        if self.projection_iterations > 16 {
-            return Err(SettingsError::TooManyIterations {
-                what: "projection_iterations",
-                value: self.projection_iterations,
-            });
-        }
-        Ok(())
-    }
-}
 
 /// A multibody world.
 #[derive(Debug)]
@@ -149,6 +83,30 @@ impl World {
         for s in self.ws.solvers.iter_mut().chain(self.ws.proj_solvers.iter_mut()) {
             s.set_options(settings.solver);
         }
+        Ok(())
+    }
+
+    /// Advances the world by one time step `h`: the stages of `step.rs` in order (its module doc).
+    /// On error the bodies keep their state.
+    pub fn step(&mut self) -> Result<(), StepError> {
+        let (settings, ws) = (&self.settings, &mut self.ws);
+        ws.prepare_bodies(settings, &self.bodies, &self.joints, &self.forces, self.time, self.steps);
+        ws.push_rows(
+            settings.timestep,
+            &self.bodies,
+            &self.joints,
+            &self.couplings,
+            &self.forces,
+            &mut self.contacts,
+        );
+        ws.solve_islands(settings, self.steps)?;
+        ws.integrate(settings, &self.bodies);
+        if settings.projection_iterations > 0 {
+            project(settings, &self.bodies, &self.joints, ws, self.steps)?;
+        }
+        ws.commit(&mut self.bodies)?;
+        self.time += settings.timestep;
+        self.steps += 1;
         Ok(())
     }
 
@@ -307,7 +265,7 @@ impl World {
         if b.kind() == BodyKind::Static {
             return Err(StateError::StaticBody(b.name().to_string()));
         }
-        let q = super::body::unit(orientation.into_inner());
+        let q = body::unit(orientation.into_inner());
         match q {
             Some(q) if position.iter().all(|c| c.is_finite()) => {
                 b.position = position;
@@ -432,10 +390,7 @@ fn checked_frame(name: &str, which: &'static str, f: Isometry3<f64>) -> Result<I
         return Err(JointError::NonFinite { joint: name.to_string(), what: which });
     }
     let q = f.rotation.into_inner();
-    let q = super::body::unit(q).ok_or(JointError::NonUnitFrame {
-        joint: name.to_string(),
-        which,
-        norm: q.norm(),
-    })?;
+    let q =
+        body::unit(q).ok_or(JointError::NonUnitFrame { joint: name.to_string(), which, norm: q.norm() })?;
     Ok(Isometry3::from_parts(f.translation, q))
 }

@@ -9,17 +9,17 @@
 
 use nalgebra::Vector3;
 
-use super::body::{BodyId, RigidBody};
-use super::coupling::{Coupling, CouplingId};
-use super::force::{ForceElement, ForceId};
-use super::island::Islands;
-use super::joint::{Joint, JointId, JointRow};
-use super::joint_rows::{JointGeometry, Side};
-use super::motor::FreeAxis;
-use super::rows::RowKey;
-use super::stats::IslandStats;
-use super::step::WarmRow;
-use super::world::World;
+use super::World;
+use crate::dynamics::body::RigidBody;
+use crate::dynamics::coupling::Coupling;
+use crate::dynamics::force::ForceElement;
+use crate::dynamics::ids::{BodyId, CouplingId, ForceId, JointId};
+use crate::dynamics::island::Islands;
+use crate::dynamics::joint::{Joint, JointRow};
+use crate::dynamics::joint_rows::JointGeometry;
+use crate::dynamics::motor::FreeAxis;
+use crate::dynamics::rows::{RowKey, Side, WarmRow};
+use crate::dynamics::stats::IslandStats;
 
 /// A joint's frames in world coordinates (see `joint.rs`): anchors `p_a`, `p_b` and x axes
 /// `e₁` (of A's frame), `f₁` (of B's frame). A joint without violation has `p_a = p_b` (along the
@@ -79,7 +79,7 @@ impl World {
     pub fn coupling_id(&self, name: &str) -> Option<CouplingId> {
         self.coupling_names.get(name).copied()
     }
-    /// Force elements, indexed by [`ForceId`](super::ForceId).
+    /// Force elements, indexed by [`ForceId`].
     pub fn forces(&self) -> &[ForceElement] {
         &self.forces
     }
@@ -93,7 +93,7 @@ impl World {
     }
 
     /// The warm-start record of a row if it was solved in the last step.
-    fn last_step_row(&self, key: RowKey) -> Option<&WarmRow> {
+    pub(super) fn last_step_row(&self, key: RowKey) -> Option<&WarmRow> {
         let w = self.ws.warm_row(key)?;
         (self.steps > 0 && w.stamp == self.steps).then_some(w)
     }
@@ -202,7 +202,7 @@ impl World {
             .fold(0.0, f64::max)
     }
 
-    pub(crate) fn joint_geometry(&self, j: &Joint) -> JointGeometry {
+    fn joint_geometry(&self, j: &Joint) -> JointGeometry {
         let (a, b) = (self.side(Some(j.body_a)), self.side(j.body_b));
         JointGeometry::new(j, &a, &b)
     }
@@ -243,7 +243,7 @@ impl World {
         Some(ja.dot(&a.v, &a.w) + jb.dot(&b.v, &b.w))
     }
 
-    pub(crate) fn side(&self, id: Option<BodyId>) -> Side {
+    fn side(&self, id: Option<BodyId>) -> Side {
         match id {
             None => Side::world(),
             Some(id) => {
