@@ -30,12 +30,10 @@
 //! step and re-sorted by insertion sort (`O(n + swaps)`, nearly `O(n)` under coherent motion); the
 //! sweep tests each box against the following ones until their lower bound passes its upper bound,
 //! then `y` and `z`. Unbounded colliders (half-spaces) are paired with every bounded collider. The
-//! pairs are sorted, so the narrow phase meets them in the order of the former all-pairs loop and
+//! pairs are sorted, so the narrow phase meets them in the order of an all-pairs loop and
 //! trajectories are bitwise those of the `O(n²)` test. Chosen over a BVH because bodies move every
 //! step (a tree needs refits and one traversal per collider for the same answer) while the sorted
-//! array is cheap to keep, allocation-free and deterministic; 1000 boxes in a 30 m yard: 19–23 µs
-//! per step against 0.9–1.1 ms for all pairs, 80–95 µs against 1.3–1.7 ms in a 10 m pile
-//! (`tests/dynamics_contact_broadphase.rs`, ignored bench).
+//! array is cheap to keep, allocation-free and deterministic.
 //!
 //! **Filtering.** Pairs on the same body, pairs without a dynamic body and pairs of bodies joined by
 //! a joint do not collide (unless the joint opts in with
@@ -47,15 +45,13 @@
 //! default [`DEFAULT_MATERIAL`], interned to a small id) and a per-collider
 //! [`Material::friction`] (default 1.0). `μ` of a pair, first match wins: the pair's own
 //! ([`World::set_pair_friction`](super::World::set_pair_friction)); the material-pair table
-//! ([`World::set_material_friction`](super::World::set_material_friction),
-//! symmetric, a material with itself included); the geometric mean `√(μ_A μ_B)` of the colliders'.
+//! ([`World::set_material_friction`](super::World::set_material_friction), symmetric, a material
+//! with itself included); the geometric mean `√(μ_A μ_B)` of the colliders'.
 //!
 //! **Compliance.** Normal and friction rows carry [`ContactSettings::compliance`] (default 1e-10 m/N,
 //! as joints): it keeps the redundant rows of a resting box (4 points, 12 rows for 6 dofs) regular
-//! for the pivoting solver. Its price: a resting contact sinks by `c F / β` (µm under tonnes), and a
-//! sticking friction row, a velocity row, creeps at `c λ_t / h²` (1e-7 m over 10 s for a 1.5 kg box
-//! on a 30° slope, `tests/dynamics_contact_ground.rs`); a position-level friction anchor would
-//! remove it.
+//! for the pivoting solver. Its price: a resting contact sinks by `c F / β`, and a sticking friction
+//! row, a velocity row, creeps at `c λ_t / h²`; a position-level friction anchor would remove it.
 //!
 //! **Compounds.** A compound collider is its parts, each a parry shape at its pose in the body frame:
 //! every part of one collider meets every part of the other (the colliders' AABBs, the unions of
@@ -76,29 +72,24 @@
 //! (within 1.4e-5 rad) and positions (within 1 nm) only the lowest triangle's is kept. On the
 //! terrain side the feature id is parry's feature kind (bits 30–31), the triangle index (bits 2–29,
 //! hence at most [`MAX_TERRAIN_TRIANGLES`]) and the triangle-local vertex, edge or face (bits 0–1),
-//! so a contact keeps its key while the same features touch. A box sliding across triangle edges
-//! gets new points (box outline × triangle edge) that start cold: 43 of 60 steps of a box sliding
-//! across 1 m cells take one pivot step (`tests/dynamics_contact_terrain.rs`). A box corner lying
-//! exactly on a triangle edge makes the two triangles' clipped points flicker (rounding), costing
-//! warm starts.
+//! so a contact keeps its key while the same features touch; points that a sliding box gets where
+//! it crosses a triangle edge are new and start cold.
 //!
 //! **Allocation.** Pair caches (and per terrain pair its per-triangle manifolds, with those of
 //! triangles left behind recycled), the point list, the broad phase's arrays, one EPA and the
 //! warm-start map are reused: a step whose contacts persist allocates nothing, on a half-space
 //! (`tests/dynamics_contact_allocation.rs`), on a height field or a mesh, for every convex shape,
 //! and between convex shapes that need GJK/EPA (`tests/dynamics_contact_terrain_allocation.rs`); a
-//! new pair or a new feature pair allocates once. parry's own drivers would not do: its
-//! height-field path rebuilds its manifold vector every call, and its polygonal-feature pairs
-//! (`contact_manifold_pfm_pfm`: any pair with a capsule, cylinder or hull, but two capsules or a
-//! ball) build a new EPA whenever the shapes overlap, i.e. at every step of a resting contact (11
-//! allocations per step for a cylinder on a box, 13–22 for a hull or cylinder on terrain). These
-//! pairs therefore run the same algorithm here (`collide.rs`: GJK, EPA, support features, clipping,
-//! the closest pair added), with the EPA reused — bitwise the same points as parry's.
+//! new pair or a new feature pair allocates once. The height-field path and the polygonal-feature
+//! pairs (any pair with a capsule, cylinder or hull, but two capsules or a ball) therefore do not go
+//! through parry's drivers, which allocate there at every step: they run the same algorithm here
+//! (`collide.rs`: GJK, EPA, support features, clipping, the closest pair added), with the EPA
+//! reused — bitwise the same points as parry's.
 //!
-//! **Not yet**: terrain on kinematic or dynamic bodies, two-sided meshes, voxels. parry's
-//! cuboid–cuboid clipping sometimes returns 2 instead of 4 points for two equal, exactly aligned
-//! boxes (a stack of equal boxes stands, drifting ~1e-6 m over 20 s; the tests use boxes 1 cm
-//! narrower per level).
+//! **Not yet**: terrain on kinematic or dynamic bodies, two-sided meshes, voxels.
+//!
+//! Measurements (broad-phase timings, creep, cold starts on terrain, parry's allocations), the
+//! history of these choices and the known flaws are in the notes, `docs/notes/contacts.md`.
 //!
 //! ```
 //! use nalgebra::Vector3;
