@@ -53,7 +53,7 @@ pub struct RunOptions {
 }
 
 /// The run's summary (`--json` prints it as one object).
-#[derive(Debug, Clone, Serialize, PartialEq)]
+#[derive(Debug, Clone, Serialize, PartialEq, Default)]
 pub struct RunSummary {
     /// Scene name.
     pub scene: String,
@@ -225,6 +225,54 @@ pub fn run_scene_observed(
     opts: &RunOptions,
     mut on_step: impl FnMut(&World),
 ) -> Result<RunSummary, RunError> {
+    let steps = prepare(scene, opts)?;
+    let mut out = Outputs::open(opts)?;
+    let bar = progress_bar(opts.progress, steps, &scene.name);
+    let mut sum = RunSummary::start(&scene.name, scene.world.settings().solver.variant.name());
+    let mut hard = HardSolves::new(if opts.dump_mlcp.is_some() { opts.dump_hard } else { 0 });
+    let mut acc = Acc { solve_us: Vec::with_capacity(steps as usize), ..Acc::default() };
+    let mut watchdog = Watchdog::new(&scene.world, scene.watchdog);
+    let every = opts.every.max(1);
+    let start = Instant::now();
+    let tick = (steps / 200).max(1);
+    for n in 0..steps {
+        let dump = opts.dump_mlcp.is_some() && hard.keep == 0 && n % every as u64 == 0;
+        scene.world.set_capture_problems(dump || hard.keep > 0);
+        let t0 = Instant::now();
+        if let Err(e) = scene.step() {
+            // A step refuses to commit a non-finite state or problem; a refused actuator is not a
+            // NaN.
+            sum.finite = matches!(e, SceneStepError::Control(_));
+            sum.error = Some(e.to_string());
+            break;
+        }
+        acc.step_us += t0.elapsed().as_secs_f64() * 1e6;
+        let world = &scene.world;
+        record_step(world, &mut sum, &mut acc);
+        if let Some(i) = watchdog.check(world)
+            && watchdog.count() == 1
+        {
+            bar.suspend(|| eprintln!("warning: {}: unstable: {i}", scene.name));
+        }
+        on_step(world);
+        out.write_step(world, &scene.name, dump, &mut sum)?;
+        hard.offer(world);
+        if n % tick == 0 {
+            bar.set_position(n + 1);
+        }
+    }
+    scene.world.set_capture_problems(false);
+    if let Some(dir) = &opts.dump_mlcp {
+        sum.dumped += hard.write(dir, &scene.name)?;
+    }
+    bar.finish_and_clear();
+    out.flush()?;
+    sum.finish(acc, &watchdog, start.elapsed().as_secs_f64(), scene.world.time());
+    Ok(sum)
+}
+
+/// Applies the options' solver variant to the scene and returns the number of steps to run.
+fn prepare(scene: &mut Scene, opts: &RunOptions) -> Result<u64, RunError> {
     if let Some(v) = opts.variant {
         let mut s = *scene.world.settings();
         s.solver.variant = v;
@@ -235,91 +283,94 @@ pub fn run_scene_observed(
     if !(duration.is_finite() && duration > 0.0) {
         return Err(RunError::Option(format!("duration {duration} must be a finite number > 0")));
     }
-    let every = opts.every.max(1);
-    let steps = (duration / h).round() as u64;
-    let path_str = |p: &Path| p.display().to_string();
-    let (stats_path, poses_path) = (opts.stats.as_deref().map(path_str), opts.poses.as_deref().map(path_str));
-    let mut stats_w = opts.stats.as_deref().map(csv_writer).transpose()?;
-    let mut poses_w = opts.poses.as_deref().map(csv_writer).transpose()?;
-    if let Some(dir) = &opts.dump_mlcp {
-        std::fs::create_dir_all(dir).map_err(|source| RunError::Io { path: path_str(dir), source })?;
-    }
-    let bar = if opts.progress { ProgressBar::new(steps) } else { ProgressBar::hidden() };
+    Ok((duration / h).round() as u64)
+}
+
+/// A progress bar over `steps` labelled `name` (hidden unless `show`).
+fn progress_bar(show: bool, steps: u64, name: &str) -> ProgressBar {
+    let bar = if show { ProgressBar::new(steps) } else { ProgressBar::hidden() };
     bar.set_style(
         ProgressStyle::with_template("{spinner} {msg} [{bar:30}] {pos}/{len} steps, {per_sec}, eta {eta}")
             .expect("static template")
             .progress_chars("=> "),
     );
-    bar.set_message(scene.name.clone());
+    bar.set_message(name.to_string());
+    bar
+}
 
-    let mut sum = RunSummary {
-        scene: scene.name.clone(),
-        variant: scene.world.settings().solver.variant.name().to_string(),
-        steps: 0,
-        sim_time_s: 0.0,
-        wall_s: 0.0,
-        realtime_factor: 0.0,
-        max_island_rows: 0,
-        max_island_bodies: 0,
-        max_islands: 0,
-        max_mass_ratio: 1.0,
-        mean_solve_us: 0.0,
-        p99_solve_us: 0.0,
-        max_solve_us: 0.0,
-        mean_step_us: 0.0,
-        mean_pivot_steps: 0.0,
-        max_pivot_steps: 0,
-        max_tight_fraction: 0.0,
-        mean_tight_fraction: 0.0,
-        max_joint_error_m: 0.0,
-        max_body_speed_mps: 0.0,
-        max_residual_rel: 0.0,
-        solves_converged: 0,
-        solves_inexact: 0,
-        solves_max_steps: 0,
-        solves_other: 0,
-        finite: true,
-        stable: true,
-        instability: None,
-        unstable_steps: 0,
-        error: None,
-        dumped: 0,
-        mean_island_solve_us: 0.0,
-        max_island_solve_us: 0.0,
-        solves_fallback: 0,
-        solves_budget: 0,
-    };
-    let mut hard = HardSolves::new(if opts.dump_mlcp.is_some() { opts.dump_hard } else { 0 });
-    let mut acc = Acc { solve_us: Vec::with_capacity(steps as usize), ..Acc::default() };
-    let mut watchdog = Watchdog::new(&scene.world, scene.watchdog);
-    let start = Instant::now();
-    let tick = (steps / 200).max(1);
-    for n in 0..steps {
-        let dump = opts.dump_mlcp.is_some() && hard.keep == 0 && n % every as u64 == 0;
-        scene.world.set_capture_problems(dump || hard.keep > 0);
-        let t0 = Instant::now();
-        match scene.step() {
-            Ok(()) => {}
-            Err(e) => {
-                // A step refuses to commit a non-finite state or problem; a refused actuator
-                // is not a NaN.
-                sum.finite = matches!(e, SceneStepError::Control(_));
-                sum.error = Some(e.to_string());
-                break;
-            }
+impl RunSummary {
+    /// The summary before the first step: nothing counted yet, finite and stable.
+    fn start(scene: &str, variant: &str) -> Self {
+        RunSummary {
+            scene: scene.to_string(),
+            variant: variant.to_string(),
+            max_mass_ratio: 1.0,
+            finite: true,
+            stable: true,
+            ..RunSummary::default()
         }
-        acc.step_us += t0.elapsed().as_secs_f64() * 1e6;
-        let world = &scene.world;
-        let step = world.steps();
-        let time = world.time();
-        record_step(world, &mut sum, &mut acc);
-        if let Some(i) = watchdog.check(world)
-            && watchdog.count() == 1
-        {
-            bar.suspend(|| eprintln!("warning: {}: unstable: {i}", scene.name));
+    }
+
+    /// The totals and means after the last step: `wall_s` of the stepping loop, `sim_time_s` the
+    /// world's time.
+    fn finish(&mut self, mut acc: Acc, watchdog: &Watchdog, wall_s: f64, sim_time_s: f64) {
+        self.wall_s = wall_s;
+        self.unstable_steps = watchdog.count();
+        self.instability = watchdog.first().map(ToString::to_string);
+        self.stable = self.finite && self.instability.is_none();
+        self.steps = acc.solve_us.len() as u64;
+        self.sim_time_s = sim_time_s;
+        self.realtime_factor = if self.wall_s > 0.0 { self.sim_time_s / self.wall_s } else { 0.0 };
+        let n = acc.solve_us.len().max(1) as f64;
+        self.mean_solve_us = acc.solve_us.iter().sum::<f64>() / n;
+        self.mean_step_us = acc.step_us / n;
+        self.mean_pivot_steps = acc.pivots as f64 / acc.solves.max(1) as f64;
+        self.mean_island_solve_us = acc.island_us / acc.solves.max(1) as f64;
+        self.mean_tight_fraction = acc.tight_largest / n;
+        acc.solve_us.sort_by(f64::total_cmp);
+        if let Some(&max) = acc.solve_us.last() {
+            self.max_solve_us = max;
+            let i = ((acc.solve_us.len() as f64 * 0.99).ceil() as usize).clamp(1, acc.solve_us.len()) - 1;
+            self.p99_solve_us = acc.solve_us[i];
         }
-        on_step(world);
-        if let (Some(w), Some(path)) = (stats_w.as_mut(), &stats_path) {
+    }
+}
+
+/// A CSV file being written, with its path for errors.
+type CsvOut = (csv::Writer<BufWriter<File>>, String);
+
+/// The run's per-step outputs: statistics and poses CSV, island problems dumped every N-th step.
+struct Outputs<'a> {
+    stats: Option<CsvOut>,
+    poses: Option<CsvOut>,
+    dump_mlcp: Option<&'a Path>,
+}
+
+impl<'a> Outputs<'a> {
+    /// Creates the files and the dump directory the options name.
+    fn open(opts: &'a RunOptions) -> Result<Self, RunError> {
+        let open = |p: &Option<PathBuf>| {
+            p.as_deref().map(|p| Ok::<_, RunError>((csv_writer(p)?, p.display().to_string()))).transpose()
+        };
+        let (stats, poses) = (open(&opts.stats)?, open(&opts.poses)?);
+        if let Some(dir) = &opts.dump_mlcp {
+            std::fs::create_dir_all(dir)
+                .map_err(|source| RunError::Io { path: dir.display().to_string(), source })?;
+        }
+        Ok(Outputs { stats, poses, dump_mlcp: opts.dump_mlcp.as_deref() })
+    }
+
+    /// Writes the step just taken: a stats row per island, a pose row per dynamic body, and with
+    /// `dump` the island problems (counted in `sum.dumped`).
+    fn write_step(
+        &mut self,
+        world: &World,
+        scene: &str,
+        dump: bool,
+        sum: &mut RunSummary,
+    ) -> Result<(), RunError> {
+        let (step, time) = (world.steps(), world.time());
+        if let Some((w, path)) = self.stats.as_mut() {
             for s in world.island_stats() {
                 let row = StatsRow {
                     step,
@@ -342,7 +393,7 @@ pub fn run_scene_observed(
                 w.serialize(row).map_err(|source| RunError::Csv { path: path.clone(), source })?;
             }
         }
-        if let (Some(w), Some(path)) = (poses_w.as_mut(), &poses_path) {
+        if let Some((w, path)) = self.poses.as_mut() {
             for b in world.bodies().iter().filter(|b| b.is_dynamic()) {
                 let (x, q) = (b.position(), b.orientation());
                 let row = PoseRow {
@@ -360,48 +411,23 @@ pub fn run_scene_observed(
                 w.serialize(row).map_err(|source| RunError::Csv { path: path.clone(), source })?;
             }
         }
-        if let (true, Some(dir)) = (dump, &opts.dump_mlcp) {
+        if let (true, Some(dir)) = (dump, self.dump_mlcp) {
             for (p, s) in world.captured_problems().iter().zip(world.island_stats()) {
-                let path = dir.join(format!("{}-step{:06}-island{}.txt", scene.name, step, s.island));
+                let path = dir.join(format!("{scene}-step{step:06}-island{}.txt", s.island));
                 write_problem(&path, p)?;
                 sum.dumped += 1;
             }
         }
-        hard.offer(world);
-        if n % tick == 0 {
-            bar.set_position(n + 1);
+        Ok(())
+    }
+
+    /// Flushes the CSV files.
+    fn flush(&mut self) -> Result<(), RunError> {
+        for (w, path) in [self.stats.as_mut(), self.poses.as_mut()].into_iter().flatten() {
+            w.flush().map_err(|source| RunError::Io { path: path.clone(), source })?;
         }
+        Ok(())
     }
-    scene.world.set_capture_problems(false);
-    if let Some(dir) = &opts.dump_mlcp {
-        sum.dumped += hard.write(dir, &scene.name)?;
-    }
-    bar.finish_and_clear();
-    for (w, p) in [(stats_w.as_mut(), &opts.stats), (poses_w.as_mut(), &opts.poses)] {
-        if let (Some(w), Some(p)) = (w, p) {
-            w.flush().map_err(|source| RunError::Io { path: path_str(p), source })?;
-        }
-    }
-    sum.wall_s = start.elapsed().as_secs_f64();
-    sum.unstable_steps = watchdog.count();
-    sum.instability = watchdog.first().map(ToString::to_string);
-    sum.stable = sum.finite && sum.instability.is_none();
-    sum.steps = acc.solve_us.len() as u64;
-    sum.sim_time_s = scene.world.time();
-    sum.realtime_factor = if sum.wall_s > 0.0 { sum.sim_time_s / sum.wall_s } else { 0.0 };
-    let n = acc.solve_us.len().max(1) as f64;
-    sum.mean_solve_us = acc.solve_us.iter().sum::<f64>() / n;
-    sum.mean_step_us = acc.step_us / n;
-    sum.mean_pivot_steps = acc.pivots as f64 / acc.solves.max(1) as f64;
-    sum.mean_island_solve_us = acc.island_us / acc.solves.max(1) as f64;
-    sum.mean_tight_fraction = acc.tight_largest / n;
-    acc.solve_us.sort_by(f64::total_cmp);
-    if let Some(&max) = acc.solve_us.last() {
-        sum.max_solve_us = max;
-        let i = ((acc.solve_us.len() as f64 * 0.99).ceil() as usize).clamp(1, acc.solve_us.len()) - 1;
-        sum.p99_solve_us = acc.solve_us[i];
-    }
-    Ok(sum)
 }
 
 fn record_step(world: &World, sum: &mut RunSummary, acc: &mut Acc) {

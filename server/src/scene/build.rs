@@ -557,7 +557,8 @@ fn subst_spring(d: &SpringDef, i: usize) -> SpringDef {
     }
 }
 
-/// Parses and builds a scene; `file` labels error locations.
+/// Parses and builds a scene; `file` labels error locations. Every stage checks what it reads, in
+/// the order of the file's sections, so the first error met is the one reported.
 pub(crate) fn build(file: &str, text: &str) -> R<Scene> {
     let src = Source::new(file, text);
     let parsed: SceneFile = toml::from_str(text).map_err(|e| SceneError::Syntax {
@@ -566,181 +567,19 @@ pub(crate) fn build(file: &str, text: &str) -> R<Scene> {
     })?;
     let sspan = parsed.scene.span();
     let sec = parsed.scene.get_ref();
-    let mut settings = WorldSettings::default();
-    let probe = Builder {
-        src: &src,
-        world: World::new(WorldSettings::default()).expect("default settings are valid"),
-        default_mu: 1.0,
-        default_compliance: crate::dynamics::DEFAULT_COMPLIANCE,
-        body_spans: HashMap::new(),
-    };
-    if let Some(h) = sec.timestep {
-        settings.timestep = probe.positive(&sspan, "timestep", h)?;
-    }
-    if let Some(g) = sec.gravity {
-        settings.gravity = probe.vec3(&sspan, "gravity", g)?;
-    }
-    if let Some(v) = &sec.variant {
-        settings.solver.variant = v.parse().map_err(|e| probe.invalid(&sspan, "variant", format!("{e}")))?;
-    }
-    if let Some(n) = sec.max_pivot_steps {
-        if n == 0 {
-            return Err(probe.invalid(&sspan, "max_pivot_steps", "must be ≥ 1"));
-        }
-        settings.solver.max_steps = n;
-    }
-    if let Some(us) = sec.max_solve_us {
-        settings.solver.max_solve_us = Some(probe.positive(&sspan, "max_solve_us", us)?);
-    }
-    if let Some(n) = sec.projection_iterations {
-        settings.projection_iterations = n;
-    }
-    if let Some(g) = sec.gyroscopic {
-        settings.gyroscopic = g;
-    }
-    if let Some(w) = sec.warm_start {
-        settings.warm_start = w;
-    }
-    if let Some(g) = &sec.geometric_stiffness {
-        settings.geometric_stiffness = GeometricStiffness::from_name(g).ok_or_else(|| {
-            probe.invalid(
-                &sspan,
-                "geometric_stiffness",
-                format!("unknown mode `{g}` (implicit, inertial, off)"),
-            )
-        })?;
-    }
-    let mut watchdog = WatchdogSettings::default();
-    if let Some(v) = sec.max_speed {
-        watchdog.max_speed = probe.positive(&sspan, "max_speed", v)?;
-    }
-    if let Some(e) = sec.energy_margin {
-        watchdog.energy_margin = probe.positive(&sspan, "energy_margin", e)?;
-    }
-    let duration = probe.positive(&sspan, "duration", sec.duration.unwrap_or(20.0))?;
+    let mut b = Builder::new(&src);
+    let settings = b.world_settings(&sspan, sec)?;
+    let watchdog = b.watchdog_settings(&sspan, sec)?;
+    let duration = b.positive(&sspan, "duration", sec.duration.unwrap_or(20.0))?;
     if sec.name.trim().is_empty() {
-        return Err(probe.invalid(&sspan, "name", "the scene needs a name"));
+        return Err(b.invalid(&sspan, "name", "the scene needs a name"));
     }
-    let world = World::new(settings).map_err(|e| probe.model(&sspan, "scene", e))?;
-    let mut b = Builder {
-        src: &src,
-        world,
-        default_mu: probe.non_negative(&sspan, "friction", sec.friction.unwrap_or(1.0))?,
-        default_compliance: probe.non_negative(
-            &sspan,
-            "compliance",
-            sec.compliance.unwrap_or(crate::dynamics::DEFAULT_COMPLIANCE),
-        )?,
-        body_spans: HashMap::new(),
-    };
-    if let Some(c) = sec.contact_compliance {
-        let mut cs = b.world.contact_settings();
-        cs.compliance = b.positive(&sspan, "contact_compliance", c)?;
-        b.world
-            .set_contact_settings(cs)
-            .map_err(|e| b.invalid(&sspan, "contact_compliance", e.to_string()))?;
-    }
-
+    b.world.set_settings(settings).map_err(|e| b.model(&sspan, "scene", e))?;
+    b.scene_defaults(&sspan, sec)?;
     for m in &parsed.material {
-        let (span, d) = (m.span(), m.get_ref());
-        let mu = b.non_negative(&span, "friction", d.friction)?;
-        b.world
-            .set_material_friction(&d.a, &d.b, mu)
-            .map_err(|e| b.invalid(&span, "friction", e.to_string()))?;
+        b.add_material(&m.span(), m.get_ref())?;
     }
-    // Bodies first (plain, then repeated), then joints and springs, so that any order of tables works.
-    let zero = Vector3::zeros();
-    for d in &parsed.body {
-        b.add_body(&d.span(), d.get_ref(), zero)?;
-    }
-    let mut instances = Vec::new();
-    for r in &parsed.repeat {
-        let span = r.span();
-        let rd = r.get_ref();
-        let offsets: Vec<Vector3<f64>> = match (&rd.offsets, rd.count) {
-            (Some(list), None) => list.iter().map(|&o| b.vec3(&span, "offsets", o)).collect::<R<_>>()?,
-            (None, Some(n)) => {
-                let step = b.vec3(&span, "step", rd.step.unwrap_or([0.0; 3]))?;
-                (0..n).map(|i| step * i as f64).collect()
-            }
-            _ => {
-                return Err(b.invalid(
-                    &span,
-                    "count",
-                    "a repeat needs either `count` (with `step`) or `offsets`",
-                ));
-            }
-        };
-        if offsets.is_empty() || offsets.len() > 10_000 {
-            return Err(b.invalid(
-                &span,
-                "count",
-                format!("{} instances (1 to 10000 allowed)", offsets.len()),
-            ));
-        }
-        for (i, &o) in offsets.iter().enumerate() {
-            for d in &rd.body {
-                b.add_body(&d.span(), &subst_body(d.get_ref(), i), o)?;
-            }
-        }
-        instances.push(offsets);
-    }
-    for d in &parsed.joint {
-        b.add_joint(&d.span(), d.get_ref(), zero)?;
-    }
-    for (r, offsets) in parsed.repeat.iter().zip(&instances) {
-        for (i, &o) in offsets.iter().enumerate() {
-            for d in &r.get_ref().joint {
-                if i >= d.get_ref().from.unwrap_or(0) {
-                    b.add_joint(&d.span(), &subst_joint(d.get_ref(), i), o)?;
-                }
-            }
-            for d in &r.get_ref().spring {
-                b.add_spring(&d.span(), &subst_spring(d.get_ref(), i), o)?;
-            }
-        }
-    }
-    for d in &parsed.spring {
-        b.add_spring(&d.span(), d.get_ref(), zero)?;
-    }
-    for d in &parsed.cable {
-        b.add_cable(&d.span(), d.get_ref())?;
-    }
-    for c in &parsed.coupling {
-        let (span, d) = (c.span(), c.get_ref());
-        let joint = |n: &String| {
-            b.world.joint_id(n).ok_or_else(|| b.invalid(&span, "joints", format!("no joint named `{n}`")))
-        };
-        let js = d.joints.iter().map(joint).collect::<R<Vec<_>>>()?;
-        let ratio = b.finite(&span, "ratio", d.ratio)?;
-        let mut cb = match (d.kind.as_str(), js.as_slice()) {
-            ("gear", &[x, y]) => CouplingBuilder::gear(&d.name, x, y, ratio),
-            ("differential", &[i, l, r]) => CouplingBuilder::differential(&d.name, i, l, r, ratio),
-            ("rack", &[r, p]) => CouplingBuilder::rack(&d.name, r, p, ratio),
-            ("gear" | "differential" | "rack", _) => {
-                return Err(b.invalid(
-                    &span,
-                    "joints",
-                    "a gear couples 2 joints [a, b]; a differential 3 [input, left, right]; a rack 2 \
-                     [slide, pinion]",
-                ));
-            }
-            (other, _) => {
-                return Err(b.invalid(
-                    &span,
-                    "type",
-                    format!("unknown coupling type `{other}` (gear, differential, rack)"),
-                ));
-            }
-        };
-        if let Some(t) = d.max_torque {
-            cb = cb.max_torque(b.non_negative(&span, "max_torque", t)?);
-        }
-        if let Some(cc) = d.compliance {
-            cb = cb.compliance(b.non_negative(&span, "compliance", cc)?);
-        }
-        b.world.add_coupling(cb).map_err(|e| b.model(&span, &d.name, e))?;
-    }
+    b.add_items(&parsed)?;
     let controls = actuators(&b, &parsed.actuator)?;
     let joystick = match &parsed.joystick {
         Some(j) => joystick(&b, &controls, j.get_ref())?,
@@ -766,6 +605,212 @@ pub(crate) fn build(file: &str, text: &str) -> R<Scene> {
         joystick,
         watchdog,
     })
+}
+
+/// The stages of [`build`]: the `[scene]` section, then the items in an order that lets the
+/// tables come in any order in the file.
+impl<'a> Builder<'a> {
+    /// An empty world with default settings (the scene's replace them once checked) and defaults.
+    fn new(src: &'a Source<'a>) -> Self {
+        Builder {
+            src,
+            world: World::new(WorldSettings::default()).expect("default settings are valid"),
+            default_mu: 1.0,
+            default_compliance: crate::dynamics::DEFAULT_COMPLIANCE,
+            body_spans: HashMap::new(),
+        }
+    }
+
+    /// The world settings of the `[scene]` section (unset keys: the defaults).
+    fn world_settings(&self, sspan: &Range<usize>, sec: &SceneSection) -> R<WorldSettings> {
+        let mut settings = WorldSettings::default();
+        if let Some(h) = sec.timestep {
+            settings.timestep = self.positive(sspan, "timestep", h)?;
+        }
+        if let Some(g) = sec.gravity {
+            settings.gravity = self.vec3(sspan, "gravity", g)?;
+        }
+        if let Some(v) = &sec.variant {
+            settings.solver.variant =
+                v.parse().map_err(|e| self.invalid(sspan, "variant", format!("{e}")))?;
+        }
+        if let Some(n) = sec.max_pivot_steps {
+            if n == 0 {
+                return Err(self.invalid(sspan, "max_pivot_steps", "must be ≥ 1"));
+            }
+            settings.solver.max_steps = n;
+        }
+        if let Some(us) = sec.max_solve_us {
+            settings.solver.max_solve_us = Some(self.positive(sspan, "max_solve_us", us)?);
+        }
+        if let Some(n) = sec.projection_iterations {
+            settings.projection_iterations = n;
+        }
+        if let Some(g) = sec.gyroscopic {
+            settings.gyroscopic = g;
+        }
+        if let Some(w) = sec.warm_start {
+            settings.warm_start = w;
+        }
+        if let Some(g) = &sec.geometric_stiffness {
+            settings.geometric_stiffness = GeometricStiffness::from_name(g).ok_or_else(|| {
+                self.invalid(
+                    sspan,
+                    "geometric_stiffness",
+                    format!("unknown mode `{g}` (implicit, inertial, off)"),
+                )
+            })?;
+        }
+        Ok(settings)
+    }
+
+    /// The watchdog's bounds of the `[scene]` section.
+    fn watchdog_settings(&self, sspan: &Range<usize>, sec: &SceneSection) -> R<WatchdogSettings> {
+        let mut watchdog = WatchdogSettings::default();
+        if let Some(v) = sec.max_speed {
+            watchdog.max_speed = self.positive(sspan, "max_speed", v)?;
+        }
+        if let Some(e) = sec.energy_margin {
+            watchdog.energy_margin = self.positive(sspan, "energy_margin", e)?;
+        }
+        Ok(watchdog)
+    }
+
+    /// The scene-wide defaults of the `[scene]` section: friction and compliance of the items that
+    /// give none, the contact compliance.
+    fn scene_defaults(&mut self, sspan: &Range<usize>, sec: &SceneSection) -> R<()> {
+        self.default_mu = self.non_negative(sspan, "friction", sec.friction.unwrap_or(1.0))?;
+        self.default_compliance = self.non_negative(
+            sspan,
+            "compliance",
+            sec.compliance.unwrap_or(crate::dynamics::DEFAULT_COMPLIANCE),
+        )?;
+        if let Some(c) = sec.contact_compliance {
+            let mut cs = self.world.contact_settings();
+            cs.compliance = self.positive(sspan, "contact_compliance", c)?;
+            self.world
+                .set_contact_settings(cs)
+                .map_err(|e| self.invalid(sspan, "contact_compliance", e.to_string()))?;
+        }
+        Ok(())
+    }
+
+    /// A `[[material]]` pair's friction.
+    fn add_material(&mut self, span: &Range<usize>, d: &MaterialDef) -> R<()> {
+        let mu = self.non_negative(span, "friction", d.friction)?;
+        self.world
+            .set_material_friction(&d.a, &d.b, mu)
+            .map_err(|e| self.invalid(span, "friction", e.to_string()))
+    }
+
+    /// Bodies first (plain, then repeated), then joints and springs (plain, repeated), cables and
+    /// couplings, so that any order of tables works.
+    fn add_items(&mut self, parsed: &SceneFile) -> R<()> {
+        let zero = Vector3::zeros();
+        for d in &parsed.body {
+            self.add_body(&d.span(), d.get_ref(), zero)?;
+        }
+        let mut instances = Vec::new();
+        for r in &parsed.repeat {
+            let offsets = self.repeat_offsets(&r.span(), r.get_ref())?;
+            for (i, &o) in offsets.iter().enumerate() {
+                for d in &r.get_ref().body {
+                    self.add_body(&d.span(), &subst_body(d.get_ref(), i), o)?;
+                }
+            }
+            instances.push(offsets);
+        }
+        for d in &parsed.joint {
+            self.add_joint(&d.span(), d.get_ref(), zero)?;
+        }
+        for (r, offsets) in parsed.repeat.iter().zip(&instances) {
+            for (i, &o) in offsets.iter().enumerate() {
+                for d in &r.get_ref().joint {
+                    if i >= d.get_ref().from.unwrap_or(0) {
+                        self.add_joint(&d.span(), &subst_joint(d.get_ref(), i), o)?;
+                    }
+                }
+                for d in &r.get_ref().spring {
+                    self.add_spring(&d.span(), &subst_spring(d.get_ref(), i), o)?;
+                }
+            }
+        }
+        for d in &parsed.spring {
+            self.add_spring(&d.span(), d.get_ref(), zero)?;
+        }
+        for d in &parsed.cable {
+            self.add_cable(&d.span(), d.get_ref())?;
+        }
+        for c in &parsed.coupling {
+            self.add_coupling(&c.span(), c.get_ref())?;
+        }
+        Ok(())
+    }
+
+    /// The offsets of a `[[repeat]]`'s instances: `offsets`, or `count` multiples of `step`.
+    fn repeat_offsets(&self, span: &Range<usize>, rd: &RepeatDef) -> R<Vec<Vector3<f64>>> {
+        let offsets: Vec<Vector3<f64>> = match (&rd.offsets, rd.count) {
+            (Some(list), None) => list.iter().map(|&o| self.vec3(span, "offsets", o)).collect::<R<_>>()?,
+            (None, Some(n)) => {
+                let step = self.vec3(span, "step", rd.step.unwrap_or([0.0; 3]))?;
+                (0..n).map(|i| step * i as f64).collect()
+            }
+            _ => {
+                return Err(self.invalid(
+                    span,
+                    "count",
+                    "a repeat needs either `count` (with `step`) or `offsets`",
+                ));
+            }
+        };
+        if offsets.is_empty() || offsets.len() > 10_000 {
+            return Err(self.invalid(
+                span,
+                "count",
+                format!("{} instances (1 to 10000 allowed)", offsets.len()),
+            ));
+        }
+        Ok(offsets)
+    }
+
+    /// A `[[coupling]]` between named joints.
+    fn add_coupling(&mut self, span: &Range<usize>, d: &CouplingDef) -> R<()> {
+        let joint = |n: &String| {
+            self.world
+                .joint_id(n)
+                .ok_or_else(|| self.invalid(span, "joints", format!("no joint named `{n}`")))
+        };
+        let js = d.joints.iter().map(joint).collect::<R<Vec<_>>>()?;
+        let ratio = self.finite(span, "ratio", d.ratio)?;
+        let mut cb = match (d.kind.as_str(), js.as_slice()) {
+            ("gear", &[x, y]) => CouplingBuilder::gear(&d.name, x, y, ratio),
+            ("differential", &[i, l, r]) => CouplingBuilder::differential(&d.name, i, l, r, ratio),
+            ("rack", &[r, p]) => CouplingBuilder::rack(&d.name, r, p, ratio),
+            ("gear" | "differential" | "rack", _) => {
+                return Err(self.invalid(
+                    span,
+                    "joints",
+                    "a gear couples 2 joints [a, b]; a differential 3 [input, left, right]; a rack 2 \
+                     [slide, pinion]",
+                ));
+            }
+            (other, _) => {
+                return Err(self.invalid(
+                    span,
+                    "type",
+                    format!("unknown coupling type `{other}` (gear, differential, rack)"),
+                ));
+            }
+        };
+        if let Some(t) = d.max_torque {
+            cb = cb.max_torque(self.non_negative(span, "max_torque", t)?);
+        }
+        if let Some(cc) = d.compliance {
+            cb = cb.compliance(self.non_negative(span, "compliance", cc)?);
+        }
+        self.world.add_coupling(cb).map_err(|e| self.model(span, &d.name, e))?;
+        Ok(())
+    }
 }
 
 fn actuators(b: &Builder, defs: &[Spanned<ActuatorDef>]) -> R<Controls> {
