@@ -136,7 +136,7 @@ impl Drop for Bridge {
 
 /// A Zenoh client of the server with the latest stats and every pose frame by simulation time.
 struct Watcher {
-    _session: zenoh::Session,
+    session: zenoh::Session,
     _subs: Vec<zenoh::pubsub::Subscriber<()>>,
     frames: Arc<Mutex<HashMap<i64, msgs::PoseFrame>>>,
     latest_pose: Arc<Mutex<Option<msgs::PoseFrame>>>,
@@ -150,24 +150,7 @@ fn nanos(t: f64) -> i64 {
 
 impl Watcher {
     fn connect(server: &Server) -> Watcher {
-        let mut c = zenoh::Config::default();
-        c.insert_json5("mode", "\"peer\"").unwrap();
-        c.insert_json5("listen/endpoints", "[]").unwrap();
-        c.insert_json5("connect/endpoints", &format!("[\"{}\"]", server.endpoint)).unwrap();
-        c.insert_json5("scouting/multicast/enabled", "false").unwrap();
-        let s = zenoh::open(c).wait().unwrap();
-        let deadline = Instant::now() + Duration::from_secs(10);
-        let description = loop {
-            assert!(Instant::now() < deadline, "the server did not answer its scene queryable");
-            let replies =
-                s.get(server.key(msgs::Topic::Scene)).timeout(Duration::from_millis(500)).wait().unwrap();
-            if let Ok(Some(r)) = replies.recv_timeout(Duration::from_millis(600))
-                && let Ok(sample) = r.result()
-            {
-                break msgs::SceneDescription::decode(&sample.payload().to_bytes()).unwrap();
-            }
-            std::thread::sleep(Duration::from_millis(50));
-        };
+        let (s, description) = server.connect();
         let frames = Arc::new(Mutex::new(HashMap::new()));
         let latest_pose = Arc::new(Mutex::new(None));
         let stats = Arc::new(Mutex::new(None));
@@ -189,22 +172,12 @@ impl Watcher {
             })
             .wait()
             .unwrap();
-        Watcher { _session: s, _subs: vec![poses, stats_sub], frames, latest_pose, stats, description }
+        Watcher { session: s, _subs: vec![poses, stats_sub], frames, latest_pose, stats, description }
     }
 
     /// Sends a control command and checks that it succeeded.
     fn control(&self, server: &Server, command: msgs::ControlCommand) {
-        let mut buf = Vec::new();
-        msgs::ControlRequest { id: 1, command }.encode(&mut buf).unwrap();
-        let replies = self
-            ._session
-            .get(server.key(msgs::Topic::Control))
-            .payload(buf)
-            .timeout(Duration::from_secs(2))
-            .wait()
-            .unwrap();
-        let reply = replies.recv_timeout(Duration::from_secs(3)).unwrap().expect("a control reply");
-        let r = msgs::ControlReply::decode(&reply.result().unwrap().payload().to_bytes()).unwrap();
+        let r = server.control(&self.session, 1, command);
         assert!(matches!(r.outcome, msgs::ControlOutcome::Ok(_)), "{r:?}");
     }
 

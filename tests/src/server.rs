@@ -88,14 +88,19 @@ impl Server {
     /// A Zenoh client session (a peer listening nowhere, no scouting) connected to this server,
     /// returned once the scene queryable answers (panics after 10 s).
     pub fn session(&self) -> zenoh::Session {
+        self.connect().0
+    }
+
+    /// [`Server::session`] with the scene description its queryable answered.
+    pub fn connect(&self) -> (zenoh::Session, msgs::SceneDescription) {
         let c = pivotsim_link::zenoh_config::ZenohEndpoints::client(vec![self.endpoint.clone()])
             .config()
             .expect("a client configuration");
         let s = zenoh::open(c).wait().expect("a client session");
         let deadline = Instant::now() + Duration::from_secs(10);
         while Instant::now() < deadline {
-            if self.scene(&s).is_some() {
-                return s;
+            if let Some(description) = self.scene(&s) {
+                return (s, description);
             }
             std::thread::sleep(Duration::from_millis(50));
         }
