@@ -24,7 +24,7 @@ use pivotsim_ros2_bridge::convert::{DIAG_BRIDGE, DIAG_INPUTS};
 use pivotsim_ros2_bridge::ros_msgs::*;
 use pivotsim_ros2_bridge::{dds, topics};
 use pivotsim_server::serve::{ServeConfig, ZenohOptions};
-use pivotsim_tests::Server;
+use pivotsim_tests::{Server, temp_file, temp_path};
 use ros2_client::qos::{Durability, History, WhenFull};
 use ros2_client::{Node, QosProfile, Subscription};
 use zenoh::Wait;
@@ -81,10 +81,6 @@ actuator = "spin"
 deadzone = 0.0
 "#;
 
-fn tmp(name: &str) -> PathBuf {
-    std::env::temp_dir().join(format!("pivotsim-ros2-{}-{name}", std::process::id()))
-}
-
 /// A DDS domain per test (and per process, so that concurrent runs rarely meet): 20 ..= 199, well
 /// inside the range whose RTPS port numbers fit in 16 bits.
 fn domain(test: u16) -> u16 {
@@ -93,8 +89,7 @@ fn domain(test: u16) -> u16 {
 
 /// The harness server on the test rig, Zenoh only (the bridge reads Zenoh).
 fn start_server(tag: &str) -> Server {
-    let scene = tmp(&format!("{tag}.toml"));
-    std::fs::write(&scene, RIG).unwrap();
+    let scene = temp_file(&format!("ros2-{tag}.toml"), RIG);
     Server::start_with(&scene.display().to_string(), &format!("r-{tag}"), |c| c.iceoryx2 = false)
 }
 
@@ -106,7 +101,7 @@ struct Bridge {
 
 impl Bridge {
     fn spawn(server: &Server, domain: u16, tag: &str) -> Bridge {
-        let log = tmp(&format!("{tag}.log"));
+        let log = temp_path(&format!("ros2-{tag}.log"));
         let child = Command::new(env!("CARGO_BIN_EXE_pivotsim-ros2-bridge"))
             .args(["--world", server.world.as_str(), "--connect", &server.endpoint])
             .args(["--domain-id", &domain.to_string(), "--dds-interface", "127.0.0.1"])
@@ -529,7 +524,7 @@ fn bridge_waits_for_a_late_server_and_never_slows_it() {
     let endpoint = pivotsim_tests::free_endpoint();
     let world = format!("r{}-late", std::process::id());
     let d = domain(3);
-    let log = tmp("late.log");
+    let log = temp_path("ros2-late.log");
     let child = Command::new(env!("CARGO_BIN_EXE_pivotsim-ros2-bridge"))
         .args(["--world", &world, "--connect", &endpoint])
         .args(["--domain-id", &d.to_string(), "--dds-interface", "127.0.0.1", "--stats-rate", "20"])
@@ -559,8 +554,7 @@ fn bridge_waits_for_a_late_server_and_never_slows_it() {
     assert!(a.get(DIAG_INPUTS).is_none());
 
     // Now the server, on that endpoint and world.
-    let scene = tmp("late.toml");
-    std::fs::write(&scene, RIG).unwrap();
+    let scene = temp_file("ros2-late.toml", RIG);
     let config = ServeConfig {
         scene: scene.display().to_string(),
         world: world.clone(),

@@ -6,21 +6,15 @@ use std::path::PathBuf;
 use std::process::Command;
 
 use pivotsim_server::solver::io;
+use pivotsim_tests::{temp_dir, temp_file};
 
 fn bin() -> Command {
     Command::new(env!("CARGO_BIN_EXE_pivotsim-server"))
 }
 
-fn tmp(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("pivotsim-scene-cli-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
-
 #[test]
 fn run_writes_the_summary_stats_poses_and_mlcp_dumps() {
-    let dir = tmp("run");
+    let dir = temp_dir("scene-cli-run");
     let (stats, poses, dump) = (dir.join("stats.csv"), dir.join("poses.csv"), dir.join("mlcp"));
     let out = bin()
         .args(["run", "--scene", "box_stack", "--duration", "1", "--json", "--every", "20"])
@@ -93,9 +87,10 @@ fn scenes_lists_every_builtin_and_a_broken_file_is_located() {
     for b in pivotsim_server::scene::BUILTIN {
         assert!(text.lines().any(|l| l.starts_with(b.name)), "{} missing from:\n{text}", b.name);
     }
-    let dir = tmp("broken");
-    let f = dir.join("broken.toml");
-    std::fs::write(&f, "[scene]\nname = \"x\"\n[[body]]\nname = \"a\"\nmass = \"heavy\"\n").unwrap();
+    let f = temp_file(
+        "scene-cli-broken.toml",
+        "[scene]\nname = \"x\"\n[[body]]\nname = \"a\"\nmass = \"heavy\"\n",
+    );
     let out = bin().args(["run", "--scene"]).arg(&f).output().unwrap();
     assert!(!out.status.success());
     let err = String::from_utf8_lossy(&out.stderr);
@@ -103,5 +98,5 @@ fn scenes_lists_every_builtin_and_a_broken_file_is_located() {
     let out = bin().args(["run", "--scene", "no-such-scene"]).output().unwrap();
     assert!(!out.status.success());
     assert!(String::from_utf8_lossy(&out.stderr).contains("box_stack"), "lists the built-in names");
-    let _ = std::fs::remove_dir_all(&dir);
+    let _ = std::fs::remove_file(&f);
 }

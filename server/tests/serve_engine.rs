@@ -9,6 +9,7 @@ use std::time::{Duration, Instant};
 
 use pivotsim_msgs as msgs;
 use pivotsim_server::serve::Engine;
+use pivotsim_tests::temp_file;
 
 const DEADMAN: Duration = Duration::from_millis(250);
 
@@ -17,11 +18,7 @@ const DEADMAN: Duration = Duration::from_millis(250);
 const RIG: &str = include_str!("support/rig.toml");
 
 fn rig_path() -> String {
-    let dir = std::env::temp_dir().join(format!("pivotsim-serve-engine-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let p = dir.join("rig.toml");
-    std::fs::write(&p, RIG).unwrap();
-    p.display().to_string()
+    temp_file("serve-engine-rig.toml", RIG).display().to_string()
 }
 
 fn engine(scene: &str) -> Engine {
@@ -269,8 +266,7 @@ fn control_requests_pause_step_reset_load_and_fail_with_typed_errors() {
         O::Error(f) => assert_eq!(f.code, msgs::ControlErrorCode::UnknownScene),
         o => panic!("{o:?}"),
     }
-    let bad = std::env::temp_dir().join(format!("pivotsim-bad-{}.toml", std::process::id()));
-    std::fs::write(&bad, "[scene]\nname = 3\n").unwrap();
+    let bad = temp_file("serve-engine-bad.toml", "[scene]\nname = 3\n");
     match control(&mut e, 7, C::LoadScene { scene: bad.display().to_string() }) {
         O::Error(f) => {
             assert_eq!(f.code, msgs::ControlErrorCode::SceneLoadFailed);

@@ -9,6 +9,7 @@ use std::time::{Duration, Instant};
 use pivotsim_msgs as msgs;
 use pivotsim_server::scene::builtin;
 use pivotsim_server::serve::Engine;
+use pivotsim_tests::temp_file;
 
 fn run(scene: &str, ticks: usize) -> (usize, u16) {
     let mut e = Engine::new(scene, msgs::WorldName::new("test").unwrap(), Duration::from_secs(1)).unwrap();
@@ -33,10 +34,7 @@ fn stats_frames_carry_the_watchdog() {
         "[scene]\ngeometric_stiffness = \"off\"",
         1,
     );
-    let dir = std::env::temp_dir().join(format!("pivotsim-serve-watchdog-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let path = dir.join("chain_off.toml");
-    std::fs::write(&path, text).unwrap();
+    let path = temp_file("serve-watchdog-chain_off.toml", &text);
     let (flagged, count) = run(&path.display().to_string(), 120);
     println!("geometric stiffness off: {flagged} of 120 frames flagged, count {count}");
     assert!(flagged > 0 && count as usize == flagged);

@@ -34,13 +34,6 @@ fn corpus() -> Vec<(String, Mlcp)> {
         .collect()
 }
 
-/// The problem without its warm start.
-fn cold(p: &Mlcp) -> Mlcp {
-    let mut c = p.clone();
-    c.set_warm_start(None, None).unwrap();
-    c
-}
-
 /// `(‖r‖∞ / ‖λ‖∞, f(λ), worst bound violation)` computed from the problem alone.
 fn judge(p: &Mlcp, lambda: &[f64]) -> (f64, f64, f64) {
     let n = p.n();
@@ -75,7 +68,7 @@ fn capped_iterates_are_feasible_and_do_no_work() {
     let mut solver = Solver::new(SolverOptions::default());
     let mut checked = 0;
     for (name, warm) in &files {
-        let cold = cold(warm);
+        let cold = warm.without_warm_start();
         for (kind, p) in [("warm", warm), ("cold", &cold)] {
             let mut lambda = vec![0.0; p.n()];
             // Every cap 1..=35 on a third of the files, a spread of caps on the rest (run time).
@@ -117,7 +110,7 @@ fn corpus_convergence_does_not_regress() {
         Solver::new(SolverOptions { variant: Variant::Auto, max_steps: 100, ..Default::default() });
     let (mut warm35, mut warm100, mut cold35, mut cold100) = (0, 0, 0, 0);
     for (name, warm) in &files {
-        let cold = cold(warm);
+        let cold = warm.without_warm_start();
         for (is_warm, p) in [(true, warm), (false, &cold)] {
             let mut lambda = vec![0.0; p.n()];
             let st = solver.solve(p, &mut lambda).clone();

@@ -12,16 +12,14 @@ use std::time::{Duration, Instant};
 
 use iceoryx2::prelude::*;
 use pivotsim_msgs as msgs;
-use pivotsim_tests::Server;
+use pivotsim_tests::{Server, temp_file};
 use zenoh::Wait;
 
 /// The drum-and-slider rig of the engine tests.
 const RIG: &str = include_str!("../../server/tests/support/rig.toml");
 
 fn rig_path(tag: &str) -> String {
-    let p = std::env::temp_dir().join(format!("pivotsim-transport-{}-{tag}.toml", std::process::id()));
-    std::fs::write(&p, RIG).unwrap();
-    p.display().to_string()
+    temp_file(&format!("transport-{tag}.toml"), RIG).display().to_string()
 }
 
 /// A client session on loopback, connected to the server, once its scene queryable answers.

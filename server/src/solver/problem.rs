@@ -733,6 +733,13 @@ impl Mlcp {
         }
     }
 
+    /// A copy of the problem without its warm start: the same problem solved cold.
+    pub fn without_warm_start(&self) -> Mlcp {
+        let mut cold = self.clone();
+        cold.clear_warm_start();
+        cold
+    }
+
     /// Adds a warm start: an initial `λ` and/or an initial index set. Validated like the rest.
     pub fn with_warm_start(
         mut self,

@@ -7,7 +7,7 @@ use std::collections::BTreeMap;
 use std::fmt::Write as _;
 use std::path::Path;
 
-use pivotsim_server::solver::{Mlcp, SolveStatus, Solver, SolverOptions, Variant, io};
+use pivotsim_server::solver::{SolveStatus, Solver, SolverOptions, Variant, io};
 use serde::Serialize;
 
 use super::timing::time_us;
@@ -56,13 +56,6 @@ fn set_of(stem: &str) -> String {
     stem.split("-hard").next().unwrap_or(stem).to_string()
 }
 
-fn cold(p: &Mlcp) -> Mlcp {
-    let mut c = p.clone();
-    // Dropping a warm start cannot fail.
-    let _ = c.set_warm_start(None, None);
-    c
-}
-
 /// Runs the stage on `dir` (nothing when it holds no files).
 pub fn run(dir: &Path, target_us: f64, repeats: usize, mut tick: impl FnMut(&str)) -> CorpusReport {
     let mut sets: BTreeMap<String, CorpusSet> = BTreeMap::new();
@@ -84,7 +77,7 @@ pub fn run(dir: &Path, target_us: f64, repeats: usize, mut tick: impl FnMut(&str
         });
         e.files += 1;
         e.max_rows = e.max_rows.max(p.n());
-        for (is_warm, q) in [(true, p.clone()), (false, cold(&p))] {
+        for (is_warm, q) in [(true, p.clone()), (false, p.without_warm_start())] {
             let mut lambda = vec![0.0; q.n()];
             let st = solver.solve(&q, &mut lambda).clone();
             let ok = st.status == SolveStatus::Converged;
@@ -98,7 +91,7 @@ pub fn run(dir: &Path, target_us: f64, repeats: usize, mut tick: impl FnMut(&str
     let mut small = Vec::new();
     for f in txt_files(&dir.join("small")) {
         let Ok(p) = io::read_mlcp_file(&f) else { continue };
-        let p = cold(&p);
+        let p = p.without_warm_start();
         let stem = f.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
         tick(&stem);
         let mut us = Vec::new();
