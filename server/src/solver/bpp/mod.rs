@@ -424,30 +424,7 @@ impl Solver {
         if converged {
             self.stats.energy_scaled = self.make_safe();
         } else {
-            // Candidates: the best iterate, the warm start and the last exact solution with frozen
-            // friction bounds, each made safe; the one with the smallest true residual is returned.
-            let mut best_r = f64::INFINITY;
-            for c in 0..3 {
-                match c {
-                    0 => self.lam.copy_from_slice(&self.best),
-                    1 => self.lam.copy_from_slice(&self.warm_lam),
-                    _ if self.have_frozen && self.prox_shift == 0.0 => self.lam.copy_from_slice(&self.frozen),
-                    _ => continue,
-                }
-                let scaled = self.make_safe();
-                let (_, r) = super::natural_residual(&self.lam, &self.w, &self.lop, &self.hip, &self.fip);
-                // The frozen-bounds solution is complementary (an ODE-style answer with friction
-                // boxes from an intermediate normal): preferred whenever there is one.
-                if r < best_r || c == 0 || (c == 2 && self.opts.prefer_frozen) {
-                    best_r = r;
-                    self.lam_hat.copy_from_slice(&self.lam);
-                    self.stats.energy_scaled = scaled;
-                    self.stats.returned_warm_start = c == 1;
-                    self.stats.returned_frozen = c == 2;
-                }
-            }
-            self.lam.copy_from_slice(&self.lam_hat);
-            self.compute_w();
+            self.choose_capped();
         }
         self.stats.solve_us += us(t);
         let (res, res_rel) = super::natural_residual(&self.lam, &self.w, &self.lop, &self.hip, &self.fip);

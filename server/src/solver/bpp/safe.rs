@@ -17,7 +17,7 @@
 //! because `K` is a cone (friction bounds scale with their normal). A problem with a fixed box that
 //! excludes 0 (no physics row does) is only projected.
 
-use super::super::effective_bounds;
+use super::super::{effective_bounds, natural_residual};
 use super::Solver;
 
 impl Solver {
@@ -54,5 +54,32 @@ impl Solver {
         }
         self.compute_w();
         true
+    }
+    /// The answer of a solve that did not converge, left in `lam` with its `w`. Candidates: the best
+    /// iterate, the warm start and the last exact solution with frozen friction bounds, each made
+    /// safe; the one with the smallest true residual is returned.
+    pub(super) fn choose_capped(&mut self) {
+        let mut best_r = f64::INFINITY;
+        for c in 0..3 {
+            match c {
+                0 => self.lam.copy_from_slice(&self.best),
+                1 => self.lam.copy_from_slice(&self.warm_lam),
+                _ if self.have_frozen && self.prox_shift == 0.0 => self.lam.copy_from_slice(&self.frozen),
+                _ => continue,
+            }
+            let scaled = self.make_safe();
+            let (_, r) = natural_residual(&self.lam, &self.w, &self.lop, &self.hip, &self.fip);
+            // The frozen-bounds solution is complementary (an ODE-style answer with friction
+            // boxes from an intermediate normal): preferred whenever there is one.
+            if r < best_r || c == 0 || (c == 2 && self.opts.prefer_frozen) {
+                best_r = r;
+                self.lam_hat.copy_from_slice(&self.lam);
+                self.stats.energy_scaled = scaled;
+                self.stats.returned_warm_start = c == 1;
+                self.stats.returned_frozen = c == 2;
+            }
+        }
+        self.lam.copy_from_slice(&self.lam_hat);
+        self.compute_w();
     }
 }
