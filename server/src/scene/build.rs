@@ -592,6 +592,9 @@ pub(crate) fn build(file: &str, text: &str) -> R<Scene> {
     if let Some(us) = sec.max_solve_us {
         settings.solver.max_solve_us = Some(probe.positive(&sspan, "max_solve_us", us)?);
     }
+    if let Some(b) = sec.newton_first {
+        settings.solver.newton_first = b;
+    }
     if let Some(n) = sec.projection_iterations {
         settings.projection_iterations = n;
     }
