@@ -595,6 +595,9 @@ pub(crate) fn build(file: &str, text: &str) -> R<Scene> {
     if let Some(b) = sec.newton_first {
         settings.solver.newton_first = b;
     }
+    if let Some(b) = sec.safeguard_after_update {
+        settings.solver.safeguard_after_update = b;
+    }
     if let Some(n) = sec.projection_iterations {
         settings.projection_iterations = n;
     }
