@@ -598,6 +598,9 @@ pub(crate) fn build(file: &str, text: &str) -> R<Scene> {
     if let Some(b) = sec.safeguard_after_update {
         settings.solver.safeguard_after_update = b;
     }
+    if let Some(n) = sec.polish_sweeps {
+        settings.solver.polish_sweeps = n;
+    }
     if let Some(n) = sec.projection_iterations {
         settings.projection_iterations = n;
     }
