@@ -11,7 +11,7 @@
 //! sweep use their updated values: Gauss–Seidel, not Jacobi). The bounds are the true ones at the
 //! current iterate: a friction row `i` with `findex_i = j` is clamped to
 //! `[lo_i · max(λ_j, 0), hi_i · max(λ_j, 0)]` with the current `λ_j`, the same coupling the pivoting
-//! solver honours (see [`effective_bounds`](super::effective_bounds)). `ω` is the relaxation factor
+//! solver honours (see [`effective_bounds`]). `ω` is the relaxation factor
 //! (`ω = 1` is plain PGS, `ω > 1` over-relaxation).
 //!
 //! The iteration stops once the relative natural-map residual `‖λ − clamp(λ − w, lo(λ), hi(λ))‖∞ / ‖λ‖∞`
