@@ -643,6 +643,15 @@ impl<'a> Builder<'a> {
         if let Some(us) = sec.max_solve_us {
             settings.solver.max_solve_us = Some(self.positive(sspan, "max_solve_us", us)?);
         }
+        if let Some(b) = sec.newton_first {
+            settings.solver.newton_first = b;
+        }
+        if let Some(b) = sec.safeguard_after_update {
+            settings.solver.safeguard_after_update = b;
+        }
+        if let Some(n) = sec.polish_sweeps {
+            settings.solver.polish_sweeps = n;
+        }
         if let Some(n) = sec.projection_iterations {
             settings.projection_iterations = n;
         }

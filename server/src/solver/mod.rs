@@ -27,7 +27,7 @@ pub mod reference;
 mod stats;
 mod variant;
 
-pub use bpp::{Fallback, Solver, SolverOptions};
+pub use bpp::{Fallback, POLISH_SWEEPS, Solver, SolverOptions};
 pub use problem::{IndexState, Mlcp, MlcpError, SYMMETRY_TOL, SymCsr, effective_bounds, natural_residual};
 pub use stats::{SolveStats, SolveStatus};
 pub use variant::{OrderingKind, UnknownVariant, Variant};

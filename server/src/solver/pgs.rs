@@ -11,7 +11,7 @@
 //! sweep use their updated values: Gauss–Seidel, not Jacobi). The bounds are the true ones at the
 //! current iterate: a friction row `i` with `findex_i = j` is clamped to
 //! `[lo_i · max(λ_j, 0), hi_i · max(λ_j, 0)]` with the current `λ_j`, the same coupling the pivoting
-//! solver honours (see [`effective_bounds`](super::effective_bounds)). `ω` is the relaxation factor
+//! solver honours (see [`effective_bounds`]). `ω` is the relaxation factor
 //! (`ω = 1` is plain PGS, `ω > 1` over-relaxation).
 //!
 //! The iteration stops once the relative natural-map residual `‖λ − clamp(λ − w, lo(λ), hi(λ))‖∞ / ‖λ‖∞`
@@ -27,7 +27,7 @@
 //! Rows whose diagonal `A_ii` is zero or tiny (`≤ 1e-300`) cannot be relaxed and are left untouched
 //! (counted in [`PgsInfo::zero_diagonals`]).
 
-use super::Mlcp;
+use super::{Mlcp, SymCsr, effective_bounds};
 
 /// Diagonals at or below this value are treated as zero.
 const TINY_DIAGONAL: f64 = 1e-300;
@@ -98,41 +98,15 @@ pub fn pgs_solve(p: &Mlcp, lambda: &mut [f64], ws: &mut PgsWorkspace, opts: &Pgs
     let b = p.b();
 
     ws.w.resize(n, 0.0);
-    ws.inv_diag.resize(n, 0.0);
-    for i in 0..n {
-        let d = a.get(i, i);
-        if d > TINY_DIAGONAL {
-            ws.inv_diag[i] = 1.0 / d;
-        } else {
-            ws.inv_diag[i] = 0.0;
-            info.zero_diagonals += 1;
-        }
-    }
+    info.zero_diagonals = inverse_diagonal(a, &mut ws.inv_diag);
 
     let check_every = opts.check_every.max(1);
     let omega = opts.omega;
     let mut last_checked = None;
     let mut blew_up = false;
     while info.iterations < opts.max_iterations {
-        for i in 0..n {
-            let inv = ws.inv_diag[i];
-            if inv == 0.0 {
-                continue;
-            }
-            let (cols, vals) = a.row(i);
-            let mut ai_lambda = 0.0;
-            for (&j, &v) in cols.iter().zip(vals) {
-                ai_lambda += v * lambda[j];
-            }
-            let (l, h) = p.bounds_at(i, lambda);
-            let next = (lambda[i] + omega * (b[i] - ai_lambda) * inv).max(l).min(h);
-            if !next.is_finite() {
-                blew_up = true;
-                break;
-            }
-            lambda[i] = next;
-        }
-        if blew_up {
+        if !pgs_sweep(a, b, p.lo(), p.hi(), p.findex(), &ws.inv_diag, omega, lambda) {
+            blew_up = true;
             break;
         }
         info.iterations += 1;
@@ -164,6 +138,58 @@ pub fn pgs_solve(p: &Mlcp, lambda: &mut [f64], ws: &mut PgsWorkspace, opts: &Pgs
         info.converged = rel <= opts.tol_rel;
     }
     info
+}
+
+/// One projected Gauss–Seidel sweep (module docs) over the rows of `a` in order, with the bounds
+/// at the current `λ`; rows with `inv_diag[i] == 0` are skipped. Returns `false` and stops at the
+/// first non-finite update, leaving the last finite values in `lambda`. Shared by [`pgs_solve`] and
+/// the pivoting solver's polish of a capped iterate.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn pgs_sweep(
+    a: &SymCsr,
+    b: &[f64],
+    lo: &[f64],
+    hi: &[f64],
+    findex: &[Option<usize>],
+    inv_diag: &[f64],
+    omega: f64,
+    lambda: &mut [f64],
+) -> bool {
+    for i in 0..lambda.len() {
+        let inv = inv_diag[i];
+        if inv == 0.0 {
+            continue;
+        }
+        let (cols, vals) = a.row(i);
+        let mut ai_lambda = 0.0;
+        for (&j, &v) in cols.iter().zip(vals) {
+            ai_lambda += v * lambda[j];
+        }
+        let (l, h) = effective_bounds(lo[i], hi[i], findex[i], lambda);
+        let next = (lambda[i] + omega * (b[i] - ai_lambda) * inv).max(l).min(h);
+        if !next.is_finite() {
+            return false;
+        }
+        lambda[i] = next;
+    }
+    true
+}
+
+/// `1 / A_ii`, or 0 for a diagonal at or below `TINY_DIAGONAL`, into `out`; returns the number of
+/// zero diagonals.
+pub(crate) fn inverse_diagonal(a: &SymCsr, out: &mut Vec<f64>) -> usize {
+    out.clear();
+    let mut zeros = 0;
+    for i in 0..a.n() {
+        let d = a.get(i, i);
+        if d > TINY_DIAGONAL {
+            out.push(1.0 / d);
+        } else {
+            out.push(0.0);
+            zeros += 1;
+        }
+    }
+    zeros
 }
 
 #[cfg(test)]

@@ -81,6 +81,9 @@ pub struct SolveStats {
     /// A solve that did not converge returned the last exact solution with frozen friction bounds
     /// (an ODE-style answer: complementary, with friction boxes from an intermediate normal).
     pub returned_frozen: bool,
+    /// Projected Gauss–Seidel sweeps that polished the answer of a solve that did not converge
+    /// (0: none, or the polish did not lower the residual and was dropped).
+    pub polish_sweeps: usize,
     /// Murty single-pivot steps taken.
     pub murty_steps: usize,
     /// Steps of the semismooth Newton fallback (stalled outer friction iteration).

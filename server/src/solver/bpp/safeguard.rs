@@ -121,7 +121,8 @@ impl Solver {
     /// rows follow their free normal impulse, `coupled.rs`), and a backtracking search on `‖r‖²`
     /// along the segment (where `w` is affine) takes the first Armijo point, or the best point
     /// tried when none is. The last resort of friction-coupled solves whose outer iteration stalls.
-    pub(super) fn semismooth_newton(&mut self, variant: Variant, budget: usize) -> bool {
+    /// With `bail`, it also gives up after `NEWTON_PATIENCE` steps without halving `‖r‖²`.
+    pub(super) fn semismooth_newton(&mut self, variant: Variant, budget: usize, bail: bool) -> bool {
         let cap = self.opts.max_steps.min(self.stats.pivot_steps + budget);
         let m = self.ap.n();
         for v in [&mut self.lam_old, &mut self.w_old, &mut self.lam_hat] {
@@ -130,7 +131,17 @@ impl Solver {
         self.stats.fallback = true;
         let mut theta = natural_residual_sq(&self.lam, &self.w, &self.lop, &self.hip, &self.fip);
         let mut best = f64::INFINITY;
+        let (mut mark, mut since) = (theta, 0);
         while self.stats.pivot_steps < cap && !self.stop_now() {
+            if bail {
+                if theta <= 0.5 * mark {
+                    (mark, since) = (theta, 0);
+                } else if since >= NEWTON_PATIENCE {
+                    break;
+                } else {
+                    since += 1;
+                }
+            }
             let (r, rr) = natural_residual(&self.lam, &self.w, &self.lop, &self.hip, &self.fip);
             if rr < best {
                 best = rr;
@@ -312,6 +323,9 @@ impl Solver {
         converged || best_true <= self.opts.tol_rel
     }
 }
+
+/// Steps the first semismooth Newton attempt may take without halving `‖r‖²`.
+const NEWTON_PATIENCE: usize = 6;
 
 /// `½λᵀAλ − bᵀλ = ½λᵀ(w − b)` with `w = Aλ − b`.
 fn objective(lambda: &[f64], w: &[f64], b: &[f64]) -> f64 {
