@@ -349,15 +349,7 @@ impl Solver {
     pub fn solve(&mut self, p: &Mlcp, lambda: &mut [f64]) -> &SolveStats {
         let t_start = Instant::now();
         let m = p.n();
-        // `auto` on a tiny island: the envelope machinery costs more than it saves; use the dense
-        // copy-and-delete kernel (measured fastest below this size).
-        let variant = if self.opts.variant == Variant::Auto && m <= AUTO_DENSE_MAX {
-            Variant::Downdate
-        } else {
-            self.opts.variant
-        };
-        self.kernel = variant;
-        let ordering = if variant.uses_envelope() { self.opts.ordering } else { OrderingKind::Natural };
+        let (variant, ordering) = self.kernel_for(m);
         self.stats.reset(self.opts.variant, ordering, m, p.a().nnz());
         if m == 0 || lambda.len() != m {
             self.stats.status = SolveStatus::Empty;
@@ -369,11 +361,55 @@ impl Solver {
             self.stats.total_us = us(t_start);
             return &self.stats;
         }
-
-        // Ordering and permuted copy of the problem. An island whose sparsity pattern did not
-        // change since the last solve (the common case from one time step to the next) keeps its
-        // ordering, its envelope and their metrics.
         let t = Instant::now();
+        self.permute_problem(p, ordering);
+        self.stats.ordering_us = us(t);
+        self.reset_iterates(m, t_start);
+        self.load_warm_start(p);
+
+        // Initial factor.
+        let t = Instant::now();
+        self.prepare(variant);
+        self.stats.factor_us += us(t);
+
+        let has_friction = self.fip.iter().any(Option::is_some);
+        let mut converged = self.bpp_loop(variant, has_friction, p.lambda0().is_some() || !has_friction);
+        if self.needs_prox {
+            converged = self.proximal_solve(variant, has_friction);
+        }
+        // The answer, made safe: the solution, or else the chosen candidate, polished.
+        let t = Instant::now();
+        if converged {
+            self.stats.energy_scaled = self.make_safe();
+        } else {
+            self.choose_capped();
+            self.polish();
+        }
+        self.stats.solve_us += us(t);
+        self.report(converged, lambda);
+        self.stats.total_us = us(t_start);
+        &self.stats
+    }
+
+    /// The factor kernel and ordering of an `m`-row solve: `auto` on a tiny island takes the dense
+    /// copy-and-delete kernel (the envelope machinery costs more than it saves; measured fastest
+    /// below `AUTO_DENSE_MAX` rows); dense kernels keep the input order.
+    fn kernel_for(&mut self, m: usize) -> (Variant, OrderingKind) {
+        let variant = if self.opts.variant == Variant::Auto && m <= AUTO_DENSE_MAX {
+            Variant::Downdate
+        } else {
+            self.opts.variant
+        };
+        self.kernel = variant;
+        let ordering = if variant.uses_envelope() { self.opts.ordering } else { OrderingKind::Natural };
+        (variant, ordering)
+    }
+
+    /// Ordering and permuted copy of the problem (`ap`, `bp`, bounds, friction indices, row norms).
+    /// An island whose sparsity pattern did not change since the last solve (the common case from
+    /// one time step to the next) keeps its ordering, its envelope and their metrics.
+    fn permute_problem(&mut self, p: &Mlcp, ordering: OrderingKind) {
+        let m = p.n();
         self.pattern_reused = self.pattern_ordering == Some(ordering)
             && self.perm.len() == m
             && self.pattern.same_pattern(p.a());
@@ -412,13 +448,16 @@ impl Solver {
         }
         self.zero_feasible =
             (0..m).all(|i| self.fip[i].is_some() || (self.lop[i] <= 0.0 && self.hip[i] >= 0.0));
-        self.stats.ordering_us = us(t);
         self.max_diag = self.ap.max_diag();
         resize(&mut self.row_norm, m);
         for i in 0..m {
             self.row_norm[i] = self.ap.row(i).1.iter().map(|a| a.abs()).sum();
         }
+    }
 
+    /// Sizes and clears the iterates, index sets and flags of an `m`-row solve, and sets its
+    /// deadline: the world's, or the solve's own budget from `t_start`.
+    fn reset_iterates(&mut self, m: usize, t_start: Instant) {
         for v in [&mut self.lam, &mut self.w, &mut self.best, &mut self.rhs, &mut self.tmp] {
             resize(v, m);
         }
@@ -441,11 +480,16 @@ impl Solver {
         self.outer_hist = [0.0; OUTER_MEMORY];
         self.needs_prox = false;
         self.prox_shift = 0.0;
-        self.best.fill(0.0);
         resize(&mut self.warm_lam, m);
         resize(&mut self.lam_hat, m);
         resize(&mut self.frozen, m);
         self.have_frozen = false;
+    }
+
+    /// The warm start, permuted: `λ₀` (kept as a candidate answer) and the index set, where a
+    /// bound state on an infinite bound is read as free.
+    fn load_warm_start(&mut self, p: &Mlcp) {
+        let m = p.n();
         if let Some(l0) = p.lambda0() {
             for new in 0..m {
                 self.lam[new] = l0[self.perm[new]];
@@ -466,27 +510,12 @@ impl Solver {
         }
         self.state0.clear();
         self.state0.extend_from_slice(&self.state);
+    }
 
-        // Initial factor.
-        let t = Instant::now();
-        self.prepare(variant);
-        self.stats.factor_us += us(t);
-
-        let has_friction = self.fip.iter().any(Option::is_some);
-        let mut converged = self.bpp_loop(variant, has_friction, p.lambda0().is_some() || !has_friction);
-        if self.needs_prox {
-            converged = self.proximal_solve(variant, has_friction);
-        }
-        // Final report against the true bounds, in the original order, of a safe iterate: the
-        // solution, or else the better of the best iterate and the warm start, each made safe.
-        let t = Instant::now();
-        if converged {
-            self.stats.energy_scaled = self.make_safe();
-        } else {
-            self.choose_capped();
-            self.polish();
-        }
-        self.stats.solve_us += us(t);
+    /// Residual against the true bounds and status of the answer in `λ`, which it writes into
+    /// `lambda` in the problem's row order with its index set.
+    fn report(&mut self, converged: bool, lambda: &mut [f64]) {
+        let m = lambda.len();
         let (res, res_rel) = super::natural_residual(&self.lam, &self.w, &self.lop, &self.hip, &self.fip);
         self.stats.residual = res;
         self.stats.residual_rel = res_rel;
@@ -511,8 +540,6 @@ impl Solver {
             tight_final += self.state[new].is_tight() as usize;
         }
         self.stats.tight = tight_final;
-        self.stats.total_us = us(t_start);
-        &self.stats
     }
 }
 
@@ -523,16 +550,13 @@ impl Solver {
         // Without a warm-start λ the friction bounds are frozen at the first (all-free) solve.
         let mut bounds_set = bounds_known;
         self.best_res = f64::INFINITY;
-        let mut best_ninf = usize::MAX;
-        let mut no_progress = 0;
-        let mut solved_by_fallback = false;
-        let mut outer_best = f64::INFINITY;
-        let mut outer_stall = 0;
+        let mut progress = Progress::default();
         if friction && bounds_known && self.opts.newton_first && self.try_newton_first(variant) {
             return true;
         }
+        let mut resolved = false;
         loop {
-            if !solved_by_fallback {
+            if !resolved {
                 if self.stop_now() {
                     return false;
                 }
@@ -548,122 +572,154 @@ impl Solver {
                     bounds_set = true;
                 }
             }
-            solved_by_fallback = false;
-            let (res, res_rel) = super::natural_residual(&self.lam, &self.w, &self.lop, &self.hip, &self.fip);
-            if !res_rel.is_finite() {
-                self.non_finite = true;
-                return false;
+            match self.after_pivot(variant, friction, &mut progress) {
+                Next::Return(converged) => return converged,
+                Next::Pivot => resolved = false,
+                Next::Resolved => resolved = true,
             }
-            if res_rel < self.best_res {
-                self.best_res = res_rel;
-                self.best.copy_from_slice(&self.lam);
+        }
+    }
+
+    /// Judges the iterate of the current index set: an exact solution of the frozen problem goes
+    /// to [`Self::at_frozen_solution`], else the infeasible variables are pivoted.
+    fn after_pivot(&mut self, variant: Variant, friction: bool, progress: &mut Progress) -> Next {
+        let (res, res_rel) = super::natural_residual(&self.lam, &self.w, &self.lop, &self.hip, &self.fip);
+        if !res_rel.is_finite() {
+            self.non_finite = true;
+            return Next::Return(false);
+        }
+        self.note_best(res_rel);
+        self.find_infeasible();
+        if self.infeasible.is_empty() {
+            self.at_frozen_solution(variant, friction, (res, res_rel), progress)
+        } else {
+            self.pivot_infeasible(variant, progress)
+        }
+    }
+
+    /// Keeps `λ` as the best iterate when its relative residual `rr` is the smallest yet.
+    fn note_best(&mut self, rr: f64) {
+        if rr.is_finite() && rr < self.best_res {
+            self.best_res = rr;
+            self.best.copy_from_slice(&self.lam);
+        }
+    }
+
+    /// The boxed LCP with the frozen bounds is solved exactly (residual `(res, res_rel)` against
+    /// the true bounds): done, or a coupled Newton point and an outer update of the friction
+    /// bounds, or — bounds consistent — iterative refinement of what rounding left.
+    fn at_frozen_solution(
+        &mut self,
+        variant: Variant,
+        friction: bool,
+        (res, res_rel): (f64, f64),
+        progress: &mut Progress,
+    ) -> Next {
+        // The answer of a capped solve (module docs, "Safe when capped").
+        self.frozen.copy_from_slice(&self.lam);
+        self.have_frozen = true;
+        if res_rel <= self.opts.tol_rel || res == 0.0 {
+            return Next::Return(true);
+        }
+        if friction && self.opts.coupled_update {
+            if let Some(true) = self.coupled_outer_step(res_rel) {
+                return Next::Return(true);
             }
-            self.find_infeasible();
-            if self.infeasible.is_empty() {
-                // The boxed LCP with these bounds is solved exactly: the answer of a capped solve
-                // (module docs, "Safe when capped").
-                self.frozen.copy_from_slice(&self.lam);
-                self.have_frozen = true;
-                if res_rel <= self.opts.tol_rel || res == 0.0 {
-                    return true;
-                }
-                if friction && self.opts.coupled_update {
-                    if let Some(true) = self.coupled_outer_step(res_rel) {
-                        return true;
-                    }
-                    let (_, rr) =
-                        super::natural_residual(&self.lam, &self.w, &self.lop, &self.hip, &self.fip);
-                    if rr.is_finite() && rr < self.best_res {
-                        self.best_res = rr;
-                        self.best.copy_from_slice(&self.lam);
-                    }
-                }
-                if friction && self.update_bounds() {
-                    // Outer iteration: friction bounds follow the new normal impulses.
-                    self.stats.friction_updates += 1;
-                    best_ninf = usize::MAX;
-                    no_progress = 0;
-                    // A stalled outer iteration (cycling between index sets) hands over to the
-                    // semismooth Newton method on the whole natural map, from the best iterate.
-                    if self.best_res < 0.9 * outer_best {
-                        outer_best = self.best_res;
-                        outer_stall = 0;
-                    } else {
-                        outer_stall += 1;
-                    }
-                    let stall_limit =
-                        if self.opts.safeguard_after_update { OUTER_STALL_SAFEGUARDED } else { OUTER_STALL };
-                    if outer_stall >= stall_limit && self.opts.newton_fallback {
-                        self.lam.copy_from_slice(&self.best);
-                        self.compute_w();
-                        if self.semismooth_newton(variant, NEWTON_BUDGET, false) {
-                            return true;
-                        }
-                        // Not there within its budget: resume the outer iteration from the best
-                        // iterate seen (Newton's or the outer loop's).
-                        if self.non_finite {
-                            return false;
-                        }
-                        self.lam.copy_from_slice(&self.best);
-                        self.compute_w();
-                        let (_, rr) =
-                            super::natural_residual(&self.lam, &self.w, &self.lop, &self.hip, &self.fip);
-                        self.best_res = self.best_res.min(rr);
-                        outer_best = self.best_res;
-                        outer_stall = 0;
-                        self.update_bounds();
-                    }
-                    if self.opts.safeguard_after_update {
-                        // The bounds moved a little: from the projection of the last solution onto
-                        // the new boxes the monotone active-set method needs few steps, where block
-                        // pivots from its index set flail among redundant contacts.
-                        self.stats.fallback = true;
-                        if !self.projected_newton(variant) {
-                            return false;
-                        }
-                        solved_by_fallback = true;
-                    }
-                    continue;
-                }
-                // Bounds consistent: what is left is rounding. Iterative refinement.
-                if self.opts.refine {
-                    self.refine_until_converged(res_rel);
-                }
-                return true;
+            let (_, rr) = super::natural_residual(&self.lam, &self.w, &self.lop, &self.hip, &self.fip);
+            self.note_best(rr);
+        }
+        if friction && self.update_bounds() {
+            return self.outer_update(variant, progress);
+        }
+        if self.opts.refine {
+            self.refine_until_converged(res_rel);
+        }
+        Next::Return(true)
+    }
+
+    /// After the friction bounds followed the new normal impulses (outer iteration): a stalled
+    /// outer iteration (cycling between index sets) hands over to the semismooth Newton method on
+    /// the whole natural map, from the best iterate; with [`SolverOptions::safeguard_after_update`]
+    /// the active-set safeguard continues from the projection onto the new boxes.
+    fn outer_update(&mut self, variant: Variant, progress: &mut Progress) -> Next {
+        self.stats.friction_updates += 1;
+        progress.best_ninf = usize::MAX;
+        progress.no_progress = 0;
+        if self.best_res < 0.9 * progress.outer_best {
+            progress.outer_best = self.best_res;
+            progress.outer_stall = 0;
+        } else {
+            progress.outer_stall += 1;
+        }
+        let stall_limit = if self.opts.safeguard_after_update { OUTER_STALL_SAFEGUARDED } else { OUTER_STALL };
+        if progress.outer_stall >= stall_limit && self.opts.newton_fallback {
+            self.lam.copy_from_slice(&self.best);
+            self.compute_w();
+            if self.semismooth_newton(variant, NEWTON_BUDGET, false) {
+                return Next::Return(true);
             }
-            let ninf = self.infeasible.len();
-            let stalled = if ninf < best_ninf {
-                best_ninf = ninf;
-                no_progress = 0;
-                false
-            } else if no_progress < self.opts.murty_after {
-                no_progress += 1;
-                false
-            } else {
-                true
-            };
-            if !stalled {
-                for k in 0..self.infeasible.len() {
-                    let i = self.infeasible[k];
-                    self.pivot(i);
-                }
-                continue;
+            // Not there within its budget: resume the outer iteration from the best iterate seen
+            // (Newton's or the outer loop's).
+            if self.non_finite {
+                return Next::Return(false);
             }
+            self.lam.copy_from_slice(&self.best);
+            self.compute_w();
+            let (_, rr) = super::natural_residual(&self.lam, &self.w, &self.lop, &self.hip, &self.fip);
+            self.best_res = self.best_res.min(rr);
+            progress.outer_best = self.best_res;
+            progress.outer_stall = 0;
+            self.update_bounds();
+        }
+        if self.opts.safeguard_after_update {
+            // The bounds moved a little: from the projection of the last solution onto the new
+            // boxes the monotone active-set method needs few steps, where block pivots from its
+            // index set flail among redundant contacts.
             self.stats.fallback = true;
-            match self.opts.fallback {
-                Fallback::Murty => {
-                    self.stats.murty_steps += 1;
-                    let i = *self.infeasible.iter().max().expect("non-empty");
-                    self.pivot(i);
+            if !self.projected_newton(variant) {
+                return Next::Return(false);
+            }
+            return Next::Resolved;
+        }
+        Next::Pivot
+    }
+
+    /// The block pivot on the infeasible variables (eq. 4), or the safeguard when their number
+    /// has not decreased for `murty_after` steps.
+    fn pivot_infeasible(&mut self, variant: Variant, progress: &mut Progress) -> Next {
+        let ninf = self.infeasible.len();
+        let stalled = if ninf < progress.best_ninf {
+            progress.best_ninf = ninf;
+            progress.no_progress = 0;
+            false
+        } else if progress.no_progress < self.opts.murty_after {
+            progress.no_progress += 1;
+            false
+        } else {
+            true
+        };
+        if !stalled {
+            for k in 0..self.infeasible.len() {
+                let i = self.infeasible[k];
+                self.pivot(i);
+            }
+            return Next::Pivot;
+        }
+        self.stats.fallback = true;
+        match self.opts.fallback {
+            Fallback::Murty => {
+                self.stats.murty_steps += 1;
+                let i = *self.infeasible.iter().max().expect("non-empty");
+                self.pivot(i);
+                Next::Pivot
+            }
+            Fallback::ProjectedNewton => {
+                if !self.projected_newton(variant) {
+                    return Next::Return(false);
                 }
-                Fallback::ProjectedNewton => {
-                    if !self.projected_newton(variant) {
-                        return false;
-                    }
-                    solved_by_fallback = true;
-                    best_ninf = usize::MAX;
-                    no_progress = 0;
-                }
+                progress.best_ninf = usize::MAX;
+                progress.no_progress = 0;
+                Next::Resolved
             }
         }
     }
@@ -843,6 +899,32 @@ impl Solver {
         }
         self.stats.tight = tight;
     }
+}
+
+/// Progress of the block pivoting loop: the fewest infeasible variables since the last reset and
+/// the steps without a decrease; the best outer residual and the outer updates without a 10 %
+/// improvement of it.
+struct Progress {
+    best_ninf: usize,
+    no_progress: usize,
+    outer_best: f64,
+    outer_stall: usize,
+}
+
+impl Default for Progress {
+    fn default() -> Self {
+        Progress { best_ninf: usize::MAX, no_progress: 0, outer_best: f64::INFINITY, outer_stall: 0 }
+    }
+}
+
+/// What the block pivoting loop does after judging an iterate.
+enum Next {
+    /// Stop: converged (`true`) or not.
+    Return(bool),
+    /// Take a pivot step with the (changed) index set.
+    Pivot,
+    /// `λ` and `w` already solve the current index set (a safeguard ended on an exact step).
+    Resolved,
 }
 
 /// Outer updates without a 10 % improvement of the best residual before the Newton fallback;
