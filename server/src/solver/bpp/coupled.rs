@@ -56,70 +56,8 @@ impl Solver {
             self.kry_v[..m].iter_mut().for_each(|x| *x /= beta);
             self.kry_g.fill(0.0);
             self.kry_g[0] = beta;
-            let mut k_used = 0;
-            for k in 0..restart {
-                // z = P⁻¹ v_k, then v_{k+1} = B z.
-                self.rhs.copy_from_slice(&self.kry_v[k * m..(k + 1) * m]);
-                self.solve_with(which);
-                self.kry_z.copy_from_slice(&self.rhs);
-                self.apply_b();
-                // Modified Gram–Schmidt.
-                for q in 0..=k {
-                    let h = dot(&self.rhs, &self.kry_v[q * m..(q + 1) * m]);
-                    self.kry_h[q * restart + k] = h;
-                    for (x, &v) in self.rhs.iter_mut().zip(&self.kry_v[q * m..(q + 1) * m]) {
-                        *x -= h * v;
-                    }
-                }
-                let hn = dot(&self.rhs, &self.rhs).sqrt();
-                self.kry_h[(k + 1) * restart + k] = hn;
-                if hn > 0.0 {
-                    for (dst, &x) in self.kry_v[(k + 1) * m..(k + 2) * m].iter_mut().zip(&self.rhs) {
-                        *dst = x / hn;
-                    }
-                }
-                // Givens rotations on column k.
-                for q in 0..k {
-                    let (a, b) = (self.kry_h[q * restart + k], self.kry_h[(q + 1) * restart + k]);
-                    self.kry_h[q * restart + k] = self.kry_cs[q] * a + self.kry_sn[q] * b;
-                    self.kry_h[(q + 1) * restart + k] = -self.kry_sn[q] * a + self.kry_cs[q] * b;
-                }
-                let (a, b) = (self.kry_h[k * restart + k], self.kry_h[(k + 1) * restart + k]);
-                let r = a.hypot(b);
-                let (c, sn) = if r == 0.0 { (1.0, 0.0) } else { (a / r, b / r) };
-                self.kry_cs[k] = c;
-                self.kry_sn[k] = sn;
-                self.kry_h[k * restart + k] = r;
-                self.kry_h[(k + 1) * restart + k] = 0.0;
-                self.kry_g[k + 1] = -sn * self.kry_g[k];
-                self.kry_g[k] *= c;
-                k_used = k + 1;
-                self.stats.krylov_iterations += 1;
-                if self.kry_g[k + 1].abs() <= GMRES_TOL * beta0 || hn == 0.0 {
-                    break;
-                }
-            }
-            // y = H⁻¹ g (upper triangular), u = V y, λ_F += P⁻¹ u.
-            for q in (0..k_used).rev() {
-                let mut acc = self.kry_g[q];
-                for p in q + 1..k_used {
-                    acc -= self.kry_h[q * restart + p] * self.kry_g[p];
-                }
-                self.kry_g[q] = acc / self.kry_h[q * restart + q];
-            }
-            self.rhs.fill(0.0);
-            for q in 0..k_used {
-                let y = self.kry_g[q];
-                for (x, &v) in self.rhs.iter_mut().zip(&self.kry_v[q * m..(q + 1) * m]) {
-                    *x += y * v;
-                }
-            }
-            self.solve_with(which);
-            for i in 0..m {
-                if !self.tight[i] {
-                    self.lam[i] += self.rhs[i];
-                }
-            }
+            let k_used = self.gmres_arnoldi(which, restart, beta0);
+            self.gmres_update(which, k_used, restart);
             self.apply_coupling();
             self.compute_w();
         }
@@ -132,6 +70,83 @@ impl Solver {
         }
         self.stats.solve_us += us(t0);
         Some(beta.sqrt() <= GMRES_ACCEPT * beta0.max(f64::MIN_POSITIVE))
+    }
+
+    /// One GMRES cycle's Arnoldi process from `v₀` (normalised, `g = β e₁` set): `z = P⁻¹ v_k`,
+    /// `v_{k+1} = B z` orthogonalised (modified Gram–Schmidt), the Hessenberg column rotated
+    /// (Givens) until the residual estimate `|g_{k+1}|` falls to `GMRES_TOL β₀`. Returns the
+    /// number of Krylov vectors used.
+    fn gmres_arnoldi(&mut self, which: FactorIn, restart: usize, beta0: f64) -> usize {
+        let m = self.ap.n();
+        let mut k_used = 0;
+        for k in 0..restart {
+            // z = P⁻¹ v_k, then v_{k+1} = B z.
+            self.rhs.copy_from_slice(&self.kry_v[k * m..(k + 1) * m]);
+            self.solve_with(which);
+            self.kry_z.copy_from_slice(&self.rhs);
+            self.apply_b();
+            // Modified Gram–Schmidt.
+            for q in 0..=k {
+                let h = dot(&self.rhs, &self.kry_v[q * m..(q + 1) * m]);
+                self.kry_h[q * restart + k] = h;
+                for (x, &v) in self.rhs.iter_mut().zip(&self.kry_v[q * m..(q + 1) * m]) {
+                    *x -= h * v;
+                }
+            }
+            let hn = dot(&self.rhs, &self.rhs).sqrt();
+            self.kry_h[(k + 1) * restart + k] = hn;
+            if hn > 0.0 {
+                for (dst, &x) in self.kry_v[(k + 1) * m..(k + 2) * m].iter_mut().zip(&self.rhs) {
+                    *dst = x / hn;
+                }
+            }
+            // Givens rotations on column k.
+            for q in 0..k {
+                let (a, b) = (self.kry_h[q * restart + k], self.kry_h[(q + 1) * restart + k]);
+                self.kry_h[q * restart + k] = self.kry_cs[q] * a + self.kry_sn[q] * b;
+                self.kry_h[(q + 1) * restart + k] = -self.kry_sn[q] * a + self.kry_cs[q] * b;
+            }
+            let (a, b) = (self.kry_h[k * restart + k], self.kry_h[(k + 1) * restart + k]);
+            let r = a.hypot(b);
+            let (c, sn) = if r == 0.0 { (1.0, 0.0) } else { (a / r, b / r) };
+            self.kry_cs[k] = c;
+            self.kry_sn[k] = sn;
+            self.kry_h[k * restart + k] = r;
+            self.kry_h[(k + 1) * restart + k] = 0.0;
+            self.kry_g[k + 1] = -sn * self.kry_g[k];
+            self.kry_g[k] *= c;
+            k_used = k + 1;
+            self.stats.krylov_iterations += 1;
+            if self.kry_g[k + 1].abs() <= GMRES_TOL * beta0 || hn == 0.0 {
+                break;
+            }
+        }
+        k_used
+    }
+
+    /// `y = H⁻¹ g` (upper triangular), `u = V y`, `λ_F += P⁻¹ u`.
+    fn gmres_update(&mut self, which: FactorIn, k_used: usize, restart: usize) {
+        let m = self.ap.n();
+        for q in (0..k_used).rev() {
+            let mut acc = self.kry_g[q];
+            for p in q + 1..k_used {
+                acc -= self.kry_h[q * restart + p] * self.kry_g[p];
+            }
+            self.kry_g[q] = acc / self.kry_h[q * restart + q];
+        }
+        self.rhs.fill(0.0);
+        for q in 0..k_used {
+            let y = self.kry_g[q];
+            for (x, &v) in self.rhs.iter_mut().zip(&self.kry_v[q * m..(q + 1) * m]) {
+                *x += y * v;
+            }
+        }
+        self.solve_with(which);
+        for i in 0..m {
+            if !self.tight[i] {
+                self.lam[i] += self.rhs[i];
+            }
+        }
     }
 
     /// Tight friction rows against a free, positive normal impulse take `μ^± λ_j`.

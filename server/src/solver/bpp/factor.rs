@@ -94,49 +94,10 @@ impl Solver {
 
     /// Brings a factor of `A_FF ⊕ I_TT` for the current `tight` into one of the buffers.
     pub(super) fn factor_for(&mut self, variant: Variant) -> FactorIn {
-        let m = self.ap.n();
         let any_tight = self.tight.iter().any(|&t| t);
         match variant {
-            Variant::Full => {
-                let t = Instant::now();
-                self.free_idx.clear();
-                self.free_idx.extend((0..m).filter(|&i| !self.tight[i]));
-                let k = self.free_idx.len();
-                // Position of each free index in the compact system (reuse `sigma` as a map).
-                for (q, &i) in self.free_idx.iter().enumerate() {
-                    self.sigma[i] = q as f64;
-                }
-                resize(&mut self.compact, k * k);
-                for (q, &i) in self.free_idx.iter().enumerate() {
-                    let (cols, vals) = self.ap.row(i);
-                    for (&j, &v) in cols.iter().zip(vals) {
-                        if !self.tight[j] {
-                            self.compact[q * k + self.sigma[j] as usize] = v;
-                        }
-                    }
-                }
-                self.sigma.fill(0.0);
-                self.stats.regularized += dense::cholesky_in_place(&mut self.compact, k, self.max_diag);
-                self.stats.factor_us += us(t);
-                FactorIn::Compact
-            }
-            Variant::Downdate => {
-                if !any_tight {
-                    return FactorIn::L0;
-                }
-                let t = Instant::now();
-                self.dense_l.copy_from_slice(&self.dense_l0);
-                for i in 0..m {
-                    if self.tight[i] {
-                        dense::delete_in_place(&mut self.dense_l, m, i, &mut self.sigma);
-                        self.stats.deletions += 1;
-                    }
-                }
-                self.sigma.fill(0.0);
-                self.stats.downdate_us += us(t);
-                self.measure_error(true);
-                FactorIn::L
-            }
+            Variant::Full => self.factor_compact(),
+            Variant::Downdate => self.dense_delete_from_l0(any_tight),
             Variant::Skyline => {
                 if !any_tight {
                     return FactorIn::L0;
@@ -155,60 +116,108 @@ impl Solver {
                 self.incremental();
                 FactorIn::L
             }
-            Variant::Auto => {
-                if !any_tight {
-                    return FactorIn::L0;
-                }
-                if self.l_valid && self.tight == self.tight_l {
-                    return FactorIn::L;
-                }
-                let (wd, wc, wf) = self.opts.auto_weights;
-                // (a) deletions from L₀.
-                let tmin = self.tight.iter().position(|&t| t).unwrap_or(m);
-                let del_all: f64 = (0..m).filter(|&i| self.tight[i]).map(|i| self.env.cost_delete(i)).sum();
-                let lmin = if self.l_valid { self.tight_l.iter().position(|&t| t).unwrap_or(m) } else { 0 };
-                let cost_a =
-                    wc * self.env.cost_copy_from(self.env.first_column_of_row(tmin.min(lmin))) + wd * del_all;
-                // (b) further deletions from the current factor, when T only grew.
-                let grew = self.l_valid && (0..m).all(|i| !self.tight_l[i] || self.tight[i]);
-                let cost_b = if grew {
-                    wd * (0..m)
-                        .filter(|&i| self.tight[i] && !self.tight_l[i])
-                        .map(|i| self.env.cost_delete(i))
-                        .sum::<f64>()
-                } else {
-                    f64::INFINITY
-                };
-                // (c) incremental refactor from the first change (a full refactor when L is stale).
-                let c = if self.l_valid {
-                    (0..m).position(|i| self.tight[i] != self.tight_l[i]).unwrap_or(m)
-                } else {
-                    0
-                };
-                let cost_c = wf * self.env.cost_factor_from(c);
-                if cost_b <= cost_a && cost_b <= cost_c {
-                    self.stats.auto_choices[1] += 1;
-                    let t = Instant::now();
-                    for i in 0..m {
-                        if self.tight[i] && !self.tight_l[i] {
-                            self.env.delete(&mut self.l, i, &mut self.sigma);
-                            self.stats.deletions += 1;
-                        }
-                    }
-                    self.tight_l.copy_from_slice(&self.tight);
-                    self.stats.downdate_us += us(t);
-                    self.measure_error(false);
-                } else if cost_a <= cost_c {
-                    self.stats.auto_choices[0] += 1;
-                    self.delete_from_l0();
-                } else {
-                    self.stats.auto_choices[2] += 1;
-                    self.incremental();
-                }
-                FactorIn::L
-            }
+            Variant::Auto => self.auto_factor(any_tight),
             Variant::Pgs => unreachable!("pgs does not pivot"),
         }
+    }
+
+    /// `full`: gathers the compact `A_FF` and factors it.
+    fn factor_compact(&mut self) -> FactorIn {
+        let m = self.ap.n();
+        let t = Instant::now();
+        self.free_idx.clear();
+        self.free_idx.extend((0..m).filter(|&i| !self.tight[i]));
+        let k = self.free_idx.len();
+        // Position of each free index in the compact system (reuse `sigma` as a map).
+        for (q, &i) in self.free_idx.iter().enumerate() {
+            self.sigma[i] = q as f64;
+        }
+        resize(&mut self.compact, k * k);
+        for (q, &i) in self.free_idx.iter().enumerate() {
+            let (cols, vals) = self.ap.row(i);
+            for (&j, &v) in cols.iter().zip(vals) {
+                if !self.tight[j] {
+                    self.compact[q * k + self.sigma[j] as usize] = v;
+                }
+            }
+        }
+        self.sigma.fill(0.0);
+        self.stats.regularized += dense::cholesky_in_place(&mut self.compact, k, self.max_diag);
+        self.stats.factor_us += us(t);
+        FactorIn::Compact
+    }
+
+    /// `downdate`: the dense `L₀` copied and the tight rows deleted.
+    fn dense_delete_from_l0(&mut self, any_tight: bool) -> FactorIn {
+        let m = self.ap.n();
+        if !any_tight {
+            return FactorIn::L0;
+        }
+        let t = Instant::now();
+        self.dense_l.copy_from_slice(&self.dense_l0);
+        for i in 0..m {
+            if self.tight[i] {
+                dense::delete_in_place(&mut self.dense_l, m, i, &mut self.sigma);
+                self.stats.deletions += 1;
+            }
+        }
+        self.sigma.fill(0.0);
+        self.stats.downdate_us += us(t);
+        self.measure_error(true);
+        FactorIn::L
+    }
+
+    /// `auto`: the cheapest predicted of (a) deletions from `L₀`, (b) further deletions from the
+    /// current factor when `T` only grew, (c) the incremental refactor from the first change.
+    fn auto_factor(&mut self, any_tight: bool) -> FactorIn {
+        let m = self.ap.n();
+        if !any_tight {
+            return FactorIn::L0;
+        }
+        if self.l_valid && self.tight == self.tight_l {
+            return FactorIn::L;
+        }
+        let (wd, wc, wf) = self.opts.auto_weights;
+        // (a) deletions from L₀.
+        let tmin = self.tight.iter().position(|&t| t).unwrap_or(m);
+        let del_all: f64 = (0..m).filter(|&i| self.tight[i]).map(|i| self.env.cost_delete(i)).sum();
+        let lmin = if self.l_valid { self.tight_l.iter().position(|&t| t).unwrap_or(m) } else { 0 };
+        let cost_a =
+            wc * self.env.cost_copy_from(self.env.first_column_of_row(tmin.min(lmin))) + wd * del_all;
+        // (b) further deletions from the current factor, when T only grew.
+        let grew = self.l_valid && (0..m).all(|i| !self.tight_l[i] || self.tight[i]);
+        let cost_b = if grew {
+            wd * (0..m)
+                .filter(|&i| self.tight[i] && !self.tight_l[i])
+                .map(|i| self.env.cost_delete(i))
+                .sum::<f64>()
+        } else {
+            f64::INFINITY
+        };
+        // (c) incremental refactor from the first change (a full refactor when L is stale).
+        let c =
+            if self.l_valid { (0..m).position(|i| self.tight[i] != self.tight_l[i]).unwrap_or(m) } else { 0 };
+        let cost_c = wf * self.env.cost_factor_from(c);
+        if cost_b <= cost_a && cost_b <= cost_c {
+            self.stats.auto_choices[1] += 1;
+            let t = Instant::now();
+            for i in 0..m {
+                if self.tight[i] && !self.tight_l[i] {
+                    self.env.delete(&mut self.l, i, &mut self.sigma);
+                    self.stats.deletions += 1;
+                }
+            }
+            self.tight_l.copy_from_slice(&self.tight);
+            self.stats.downdate_us += us(t);
+            self.measure_error(false);
+        } else if cost_a <= cost_c {
+            self.stats.auto_choices[0] += 1;
+            self.delete_from_l0();
+        } else {
+            self.stats.auto_choices[2] += 1;
+            self.incremental();
+        }
+        FactorIn::L
     }
 
     /// `skyline`: copy the columns of `L₀` from `min T` on, then delete every tight index.

@@ -651,7 +651,8 @@ impl Solver {
         } else {
             progress.outer_stall += 1;
         }
-        let stall_limit = if self.opts.safeguard_after_update { OUTER_STALL_SAFEGUARDED } else { OUTER_STALL };
+        let stall_limit =
+            if self.opts.safeguard_after_update { OUTER_STALL_SAFEGUARDED } else { OUTER_STALL };
         if progress.outer_stall >= stall_limit && self.opts.newton_fallback {
             self.lam.copy_from_slice(&self.best);
             self.compute_w();

@@ -46,19 +46,7 @@ impl Solver {
                 self.non_finite = true;
                 return false;
             }
-            // Ratio test: the largest step along λ̂ − λ_old that keeps the free variables inside.
-            let mut alpha: f64 = 1.0;
-            for i in 0..m {
-                if self.tight[i] {
-                    continue;
-                }
-                let (x0, x1) = (self.lam_old[i], self.lam[i]);
-                if x1 < self.lo_eff[i] && x1 < x0 {
-                    alpha = alpha.min(((self.lo_eff[i] - x0) / (x1 - x0)).max(0.0));
-                } else if x1 > self.hi_eff[i] && x1 > x0 {
-                    alpha = alpha.min(((self.hi_eff[i] - x0) / (x1 - x0)).max(0.0));
-                }
-            }
+            let alpha = self.ratio_test();
             if alpha >= 1.0 {
                 // At the face minimiser: release the bound variables whose gradient points inwards.
                 self.find_infeasible();
@@ -89,29 +77,7 @@ impl Solver {
                 self.set_binding_set();
                 continue;
             }
-            // Else a partial step; bind the variables that block at `alpha`.
-            for i in 0..m {
-                let (x0, x1) = (self.lam_old[i], self.lam_hat[i]);
-                let x = x0 + alpha * (x1 - x0);
-                if self.tight[i] {
-                    self.lam[i] = x;
-                    continue;
-                }
-                let (lo, hi) = (self.lo_eff[i], self.hi_eff[i]);
-                let tol = 1e-12 * (1.0 + x0.abs().max(x1.abs()));
-                if x1 < lo && x <= lo + tol {
-                    self.lam[i] = lo;
-                    self.state[i] = IndexState::Lower;
-                    self.tight[i] = true;
-                } else if x1 > hi && x >= hi - tol {
-                    self.lam[i] = hi;
-                    self.state[i] = IndexState::Upper;
-                    self.tight[i] = true;
-                } else {
-                    self.lam[i] = x.max(lo).min(hi);
-                }
-            }
-            self.compute_w();
+            self.partial_step(alpha);
         }
     }
 
@@ -179,30 +145,7 @@ impl Solver {
                 theta = theta_n;
                 continue;
             }
-            // Backtracking between λ_old and the Newton point (kept in lam_hat / tmp).
-            self.lam_hat.copy_from_slice(&self.lam);
-            self.tmp.copy_from_slice(&self.w);
-            let (mut best_t, mut best_theta) = (1.0, theta_n);
-            let mut t = 0.5;
-            while t >= 1e-4 {
-                for i in 0..m {
-                    self.lam[i] = self.lam_old[i] + t * (self.lam_hat[i] - self.lam_old[i]);
-                    self.w[i] = self.w_old[i] + t * (self.tmp[i] - self.w_old[i]);
-                }
-                let th = natural_residual_sq(&self.lam, &self.w, &self.lop, &self.hip, &self.fip);
-                if th < best_theta {
-                    (best_t, best_theta) = (t, th);
-                }
-                if th <= (1.0 - 2e-4 * t) * theta {
-                    break;
-                }
-                t *= 0.5;
-            }
-            for i in 0..m {
-                self.lam[i] = self.lam_old[i] + best_t * (self.lam_hat[i] - self.lam_old[i]);
-                self.w[i] = self.w_old[i] + best_t * (self.tmp[i] - self.w_old[i]);
-            }
-            theta = best_theta;
+            theta = self.backtrack_natural(theta, theta_n);
         }
         // The final iterate may be the best one.
         let (_, rr) = natural_residual(&self.lam, &self.w, &self.lop, &self.hip, &self.fip);
@@ -211,6 +154,82 @@ impl Solver {
             self.best.copy_from_slice(&self.lam);
         }
         false
+    }
+
+    /// The largest step along `λ̂ − λ_old` (`λ̂` in `λ`) that keeps the free variables inside
+    /// their boxes (1 when none blocks).
+    fn ratio_test(&self) -> f64 {
+        let mut alpha: f64 = 1.0;
+        for i in 0..self.ap.n() {
+            if self.tight[i] {
+                continue;
+            }
+            let (x0, x1) = (self.lam_old[i], self.lam[i]);
+            if x1 < self.lo_eff[i] && x1 < x0 {
+                alpha = alpha.min(((self.lo_eff[i] - x0) / (x1 - x0)).max(0.0));
+            } else if x1 > self.hi_eff[i] && x1 > x0 {
+                alpha = alpha.min(((self.hi_eff[i] - x0) / (x1 - x0)).max(0.0));
+            }
+        }
+        alpha
+    }
+
+    /// The step to `λ_old + α (λ̂ − λ_old)` (`λ̂` in `lam_hat`), binding the variables that block
+    /// at `α`; leaves `λ`, `w`.
+    fn partial_step(&mut self, alpha: f64) {
+        let m = self.ap.n();
+        for i in 0..m {
+            let (x0, x1) = (self.lam_old[i], self.lam_hat[i]);
+            let x = x0 + alpha * (x1 - x0);
+            if self.tight[i] {
+                self.lam[i] = x;
+                continue;
+            }
+            let (lo, hi) = (self.lo_eff[i], self.hi_eff[i]);
+            let tol = 1e-12 * (1.0 + x0.abs().max(x1.abs()));
+            if x1 < lo && x <= lo + tol {
+                self.lam[i] = lo;
+                self.state[i] = IndexState::Lower;
+                self.tight[i] = true;
+            } else if x1 > hi && x >= hi - tol {
+                self.lam[i] = hi;
+                self.state[i] = IndexState::Upper;
+                self.tight[i] = true;
+            } else {
+                self.lam[i] = x.max(lo).min(hi);
+            }
+        }
+        self.compute_w();
+    }
+
+    /// Backtracking on `‖r‖²` between `λ_old` (with `w_old`) and the Newton point (in `λ`, `w`;
+    /// `θ_n` its merit, `θ` the old one): the first Armijo point of `t = ½, ¼, …, 1e-4`, or the
+    /// best tried when none is. Leaves that point in `λ`, `w`; returns its merit.
+    fn backtrack_natural(&mut self, theta: f64, theta_n: f64) -> f64 {
+        let m = self.ap.n();
+        self.lam_hat.copy_from_slice(&self.lam);
+        self.tmp.copy_from_slice(&self.w);
+        let (mut best_t, mut best_theta) = (1.0, theta_n);
+        let mut t = 0.5;
+        while t >= 1e-4 {
+            for i in 0..m {
+                self.lam[i] = self.lam_old[i] + t * (self.lam_hat[i] - self.lam_old[i]);
+                self.w[i] = self.w_old[i] + t * (self.tmp[i] - self.w_old[i]);
+            }
+            let th = natural_residual_sq(&self.lam, &self.w, &self.lop, &self.hip, &self.fip);
+            if th < best_theta {
+                (best_t, best_theta) = (t, th);
+            }
+            if th <= (1.0 - 2e-4 * t) * theta {
+                break;
+            }
+            t *= 0.5;
+        }
+        for i in 0..m {
+            self.lam[i] = self.lam_old[i] + best_t * (self.lam_hat[i] - self.lam_old[i]);
+            self.w[i] = self.w_old[i] + best_t * (self.tmp[i] - self.w_old[i]);
+        }
+        best_theta
     }
 
     /// Index set read off the natural map at `(λ, w)` with the bounds at `λ`: `T_lo` where
