@@ -234,7 +234,15 @@ impl Envelope {
     /// column). `sigma` is scratch of length `m` that must be zero on entry and is zero on exit.
     /// Returns the number of stored entries the sweep touched.
     pub fn delete(&self, l: &mut [f64], i: usize, sigma: &mut [f64]) -> usize {
-        let m = self.m;
+        self.delete_before(l, i, sigma, self.m)
+    }
+
+    /// [`Self::delete`] that updates only the columns before `end`: when every index from `end`
+    /// on is deleted too (tight), their values do not matter — each becomes an identity row and
+    /// column at its own deletion — so the sweep stops there (a trailing tight block costs no
+    /// rank-1 updates at all). The factor's free columns are the same as with [`Self::delete`].
+    pub fn delete_before(&self, l: &mut [f64], i: usize, sigma: &mut [f64], end: usize) -> usize {
+        let m = self.m.min(end.max(i + 1));
         let si = self.s[i];
         let ci = self.colptr[i];
         sigma[i + 1..=si].copy_from_slice(&l[ci + 1..=ci + (si - i)]);
@@ -270,6 +278,10 @@ impl Envelope {
                 }
             }
             k += 1;
+        }
+        // Columns from `end` on were not swept: clear what the sweep would have consumed there.
+        if k <= hi && k < self.m {
+            sigma[k..=hi.min(self.m - 1)].fill(0.0);
         }
         touched
     }
@@ -321,7 +333,13 @@ impl Envelope {
     /// Predicted sweep length (stored entries) of deleting index `i`.
     #[inline]
     pub fn cost_delete(&self, i: usize) -> f64 {
-        let reach = self.next_break[i];
+        self.cost_delete_before(i, self.m)
+    }
+
+    /// Predicted sweep length of [`Self::delete_before`]`(i, end)`.
+    #[inline]
+    pub fn cost_delete_before(&self, i: usize, end: usize) -> f64 {
+        let reach = self.next_break[i].min(end.max(i + 1)).min(self.m);
         self.sub_cum[reach] - self.sub_cum[(i + 1).min(reach)]
     }
 
@@ -500,6 +518,45 @@ mod tests {
                 env.factor_from(&a, &tight, &mut lr, 0, a.max_diag());
                 let err = (dense_of(&env, &lr) - &reference).norm() / reference.norm();
                 assert!(err < 1e-13, "refactor n={n} frac={frac} err={err}");
+            }
+        }
+    }
+
+    /// `delete_before(end)` with `end` one past the last free index (a trailing tight block, and
+    /// tight indices scattered before it) gives the factor of `A_FF ⊕ I` like a refactor.
+    #[test]
+    fn deletions_stop_at_the_last_free_index() {
+        let mut rng = ChaCha8Rng::seed_from_u64(14);
+        for (n, bw) in [(12, 3), (90, 8), (200, 20)] {
+            let (a, d) = random_banded(n, bw, 0.6, &mut rng);
+            let mut env = Envelope::new();
+            env.build(&a);
+            let mut l0 = vec![0.0; env.len()];
+            env.factor_from(&a, &vec![false; n], &mut l0, 0, a.max_diag());
+            for (frac, tail) in [(0.1, n / 3), (0.3, n / 10), (0.0, n / 2), (0.5, 1)] {
+                let mut tight: Vec<bool> = (0..n).map(|_| rng.random_range(0.0..1.0) < frac).collect();
+                tight[n - tail - 1] = false;
+                tight[n - tail..].fill(true);
+                let end = n - tail;
+                let mut l = l0.clone();
+                let mut sigma = vec![0.0; n];
+                let (mut swept, mut swept_all) = (0, 0);
+                for i in (0..n).filter(|&i| tight[i]) {
+                    swept += env.delete_before(&mut l, i, &mut sigma, end);
+                    assert!(sigma.iter().all(|&x| x == 0.0), "n={n}: sigma left dirty");
+                }
+                let mut la = l0.clone();
+                for i in (0..n).filter(|&i| tight[i]) {
+                    swept_all += env.delete(&mut la, i, &mut sigma);
+                }
+                let reference = masked_reference(&d, &tight);
+                let err = (dense_of(&env, &l) - &reference).norm() / reference.norm();
+                assert!(err < 1e-12, "n={n} frac={frac} tail={tail} err={err}");
+                // The last column has nothing below its diagonal: a tail of one saves nothing.
+                assert!(
+                    swept < swept_all || (tail == 1 && swept == swept_all),
+                    "n={n} tail={tail}: swept {swept}, full sweeps {swept_all}"
+                );
             }
         }
     }

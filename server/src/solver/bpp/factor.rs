@@ -178,9 +178,11 @@ impl Solver {
             return FactorIn::L;
         }
         let (wd, wc, wf) = self.opts.auto_weights;
+        let end = self.free_end();
         // (a) deletions from L₀.
         let tmin = self.tight.iter().position(|&t| t).unwrap_or(m);
-        let del_all: f64 = (0..m).filter(|&i| self.tight[i]).map(|i| self.env.cost_delete(i)).sum();
+        let del_all: f64 =
+            (0..m).filter(|&i| self.tight[i]).map(|i| self.env.cost_delete_before(i, end)).sum();
         let lmin = if self.l_valid { self.tight_l.iter().position(|&t| t).unwrap_or(m) } else { 0 };
         let cost_a =
             wc * self.env.cost_copy_from(self.env.first_column_of_row(tmin.min(lmin))) + wd * del_all;
@@ -189,7 +191,7 @@ impl Solver {
         let cost_b = if grew {
             wd * (0..m)
                 .filter(|&i| self.tight[i] && !self.tight_l[i])
-                .map(|i| self.env.cost_delete(i))
+                .map(|i| self.env.cost_delete_before(i, end))
                 .sum::<f64>()
         } else {
             f64::INFINITY
@@ -203,7 +205,7 @@ impl Solver {
             let t = Instant::now();
             for i in 0..m {
                 if self.tight[i] && !self.tight_l[i] {
-                    self.env.delete(&mut self.l, i, &mut self.sigma);
+                    self.env.delete_before(&mut self.l, i, &mut self.sigma, end);
                     self.stats.deletions += 1;
                 }
             }
@@ -221,6 +223,12 @@ impl Solver {
     }
 
     /// `skyline`: copy the columns of `L₀` from `min T` on, then delete every tight index.
+    /// One past the last free index: deletions need not sweep the tight indices after it
+    /// (`Envelope::delete_before`).
+    fn free_end(&self) -> usize {
+        self.tight.iter().rposition(|&t| !t).map_or(0, |f| f + 1)
+    }
+
     pub(super) fn delete_from_l0(&mut self) {
         let m = self.ap.n();
         let t = Instant::now();
@@ -233,9 +241,10 @@ impl Solver {
         } else {
             self.env.copy_from_column(&self.l0, &mut self.l, 0);
         }
+        let end = self.free_end();
         for i in tmin..m {
             if self.tight[i] {
-                self.env.delete(&mut self.l, i, &mut self.sigma);
+                self.env.delete_before(&mut self.l, i, &mut self.sigma, end);
                 self.stats.deletions += 1;
             }
         }
