@@ -96,7 +96,8 @@
 //! **Factor strategies** (`factor.rs`). `full`: gather and factor the compact `A_FF` each step.
 //! `downdate`: dense `L₀ = chol(A)` once, per step copy + deletions (`dense.rs`). `skyline`: reorder
 //! (CM/RCM), envelope `L₀`, per step copy of the columns from `g_{min T}` on + deletions on the
-//! skyline (`envelope.rs`). `skyline-refactor`: envelope factor of `A_FF ⊕ I` per step.
+//! skyline (`envelope.rs`), each sweep stopping at the last free index (the columns of a trailing
+//! tight block do not matter: each becomes identity at its own deletion). `skyline-refactor`: envelope factor of `A_FF ⊕ I` per step.
 //! `incremental`: keep the last factor and refactor from the first index whose state changed.
 //! `auto`: per step the cheapest predicted of deletions from `L₀`, deletions from the last factor
 //! (when `T` only grew) and the incremental refactor, from the skyline cost model.
