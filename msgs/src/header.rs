@@ -98,14 +98,14 @@ impl Kind {
 
     /// Largest payload a valid frame of this kind can have (bytes after the header).
     pub fn max_payload_len(self) -> usize {
-        use crate::{input, pose, stats};
+        use crate::layout::*;
         match self {
-            Kind::PoseFrame => pose::POSE_FIXED_LEN + pose::BODY_RECORD_LEN * pose::MAX_BODIES,
-            Kind::SolverStats => stats::STATS_FIXED_LEN + stats::ISLAND_RECORD_LEN * stats::MAX_ISLANDS,
-            Kind::Joystick => input::JOYSTICK_LEN,
-            Kind::Winch => input::WINCH_LEN,
-            Kind::Boom => input::BOOM_FIXED_LEN + input::BOOM_ENTRY_LEN * input::MAX_BOOM_TARGETS,
-            Kind::Actuator => input::ACTUATOR_LEN,
+            Kind::PoseFrame => POSE_FIXED_LEN + BODY_RECORD_LEN * MAX_BODIES,
+            Kind::SolverStats => STATS_FIXED_LEN + ISLAND_RECORD_LEN * MAX_ISLANDS,
+            Kind::Joystick => JOYSTICK_LEN,
+            Kind::Winch => WINCH_LEN,
+            Kind::Boom => BOOM_FIXED_LEN + BOOM_ENTRY_LEN * MAX_BOOM_TARGETS,
+            Kind::Actuator => ACTUATOR_LEN,
             Kind::ControlRequest => 4096,
             Kind::ControlReply => 16384,
             Kind::SceneDescription => MAX_FRAME_LEN - HEADER_LEN,

@@ -42,25 +42,16 @@
 
 use crate::codes::{ActuatorMode, RejectReason};
 use crate::header::{self, DecodeError, FrameError, HEADER_LEN, Kind};
+pub use crate::layout::{
+    ACTUATOR_LEN, BOOM_ENTRY_LEN, BOOM_FIXED_LEN, JOYSTICK_LEN, MAX_BOOM_TARGETS, WINCH_LEN,
+};
 use crate::le;
 use crate::name::{ActuatorName, MAX_ACTUATOR_NAME_LEN, NameError};
 
-/// Joystick payload bytes.
-pub const JOYSTICK_LEN: usize = 152;
-/// Winch payload bytes.
-pub const WINCH_LEN: usize = 56;
-/// Actuator payload bytes.
-pub const ACTUATOR_LEN: usize = 56;
-/// Fixed part of a boom payload.
-pub const BOOM_FIXED_LEN: usize = 16;
-/// Bytes of one boom entry.
-pub const BOOM_ENTRY_LEN: usize = 40;
 /// Most joystick axes.
 pub const MAX_AXES: usize = 32;
 /// Most joystick buttons.
 pub const MAX_BUTTONS: usize = 64;
-/// Most entries of a boom command.
-pub const MAX_BOOM_TARGETS: usize = 16;
 
 /// A gamepad or console state.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]

@@ -23,6 +23,7 @@ mod control;
 mod input;
 mod json;
 mod keys;
+mod layout;
 mod le;
 mod message;
 mod name;

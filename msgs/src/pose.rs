@@ -26,14 +26,9 @@
 //! reused buffer (the publisher hot path).
 
 use crate::header::{self, DecodeError, FrameError, HEADER_LEN, Kind};
+pub use crate::layout::{BODY_RECORD_LEN, MAX_BODIES, POSE_FIXED_LEN};
 use crate::le;
 
-/// Bytes of the fixed part of the payload.
-pub const POSE_FIXED_LEN: usize = 32;
-/// Bytes of one body record.
-pub const BODY_RECORD_LEN: usize = 112;
-/// Most bodies in one frame.
-pub const MAX_BODIES: usize = 65_535;
 /// Largest accepted `| ‖q‖ − 1 |` of an orientation quaternion.
 pub const QUAT_NORM_TOLERANCE: f64 = 1e-6;
 /// Body flag: the body sleeps (pose unchanged, velocities zero).

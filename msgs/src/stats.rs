@@ -46,14 +46,9 @@
 
 use crate::codes::{REJECT_REASONS, RejectReason, SolveStatus, SolverVariant};
 use crate::header::{self, DecodeError, FrameError, HEADER_LEN, Kind};
+pub use crate::layout::{ISLAND_RECORD_LEN, MAX_ISLANDS, STATS_FIXED_LEN};
 use crate::le;
 
-/// Bytes of the fixed part of the payload.
-pub const STATS_FIXED_LEN: usize = 176;
-/// Bytes of one island record.
-pub const ISLAND_RECORD_LEN: usize = 40;
-/// Most islands in one frame.
-pub const MAX_ISLANDS: usize = 65_535;
 /// Island flag: a fallback (projected Newton, Murty, semismooth Newton) ran.
 pub const ISLAND_FALLBACK: u8 = 1;
 

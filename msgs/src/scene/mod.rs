@@ -2,9 +2,11 @@
 //! about a world — bodies with their collision shapes, the joint tree, the actuators and the
 //! default joystick mapping. Served by the `scene` queryable.
 
+mod error;
 mod types;
 mod validate;
 
+pub use error::SceneError;
 pub use types::{
     ActuatorInfo, ActuatorKind, BodyInfo, BodyKind, Collider, HeightData, JointInfo, JointKind,
     JoystickBinding, JoystickInput, MAX_BINDINGS, MAX_COLLIDERS_PER_BODY, MAX_HEIGHTFIELD_DIM,
@@ -12,4 +14,3 @@ pub use types::{
     MAX_REFERENCE_LEN, MAX_SCENE_ACTUATORS, MAX_SCENE_BODIES, MAX_SCENE_JOINTS, MeshData, SceneDescription,
     Shape,
 };
-pub use validate::SceneError;

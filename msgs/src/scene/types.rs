@@ -10,7 +10,7 @@ use crate::header::{DecodeError, Kind};
 use crate::input::{InputCommand, InputError};
 use crate::json;
 
-use super::validate::SceneError;
+use super::error::SceneError;
 
 /// Most bodies.
 pub const MAX_SCENE_BODIES: usize = 65_535;

@@ -1,0 +1,33 @@
+//! Payload sizes of the binary frame kinds, the lowest layer of the format: the header bounds
+//! a frame's payload by them (`Kind::max_payload_len`) before any payload byte is read, and each
+//! kind's codec lays its payload out by them. Specified byte by byte in `msgs/README.md`.
+
+// Inputs (`input.rs`).
+/// Joystick payload bytes.
+pub const JOYSTICK_LEN: usize = 152;
+/// Winch payload bytes.
+pub const WINCH_LEN: usize = 56;
+/// Actuator payload bytes.
+pub const ACTUATOR_LEN: usize = 56;
+/// Fixed part of a boom payload.
+pub const BOOM_FIXED_LEN: usize = 16;
+/// Bytes of one boom entry.
+pub const BOOM_ENTRY_LEN: usize = 40;
+/// Most entries of a boom command.
+pub const MAX_BOOM_TARGETS: usize = 16;
+
+// Pose frames (`pose.rs`).
+/// Bytes of the fixed part of a pose frame's payload.
+pub const POSE_FIXED_LEN: usize = 32;
+/// Bytes of one body record.
+pub const BODY_RECORD_LEN: usize = 112;
+/// Most bodies in one frame.
+pub const MAX_BODIES: usize = 65_535;
+
+// Solver statistics (`stats.rs`).
+/// Bytes of the fixed part of a stats frame's payload.
+pub const STATS_FIXED_LEN: usize = 176;
+/// Bytes of one island record.
+pub const ISLAND_RECORD_LEN: usize = 40;
+/// Most islands in one frame.
+pub const MAX_ISLANDS: usize = 65_535;
