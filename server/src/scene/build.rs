@@ -14,38 +14,19 @@ use std::ops::Range;
 use nalgebra::{Isometry3, Matrix3, Quaternion, SymmetricEigen, Translation3, UnitQuaternion, Vector3};
 use toml::Spanned;
 
+use super::checks::{R, Source};
 use super::controls::{
     Actuator, ActuatorKind, ActuatorTarget, AxisMode, ButtonAction, Controls, JoyAxis, JoyButton,
     JoystickMap, Neutral, SceneEvent, Script, ScriptEntry,
 };
 use super::format::*;
-use super::{Location, Scene, SceneError};
+use super::{Scene, SceneError};
 use crate::dynamics::{
     BodyBuilder, BodyId, ChainBuilder, ChainEnd, ChainShape, ColliderBuilder, CollisionGroups,
     CouplingBuilder, ForceElement, FreeAxis, GeometricStiffness, JointBuilder, JointFrames, JointKind,
     JointLimit, JointMotor, Material, ModelError, Shape, SpringDamper, WatchdogSettings, World,
     WorldSettings, box_inertia, capsule_inertia, cylinder_inertia, sphere_inertia,
 };
-
-/// Source text with a line index, for locating spans.
-pub(crate) struct Source<'a> {
-    pub file: &'a str,
-    line_starts: Vec<usize>,
-}
-
-impl<'a> Source<'a> {
-    pub fn new(file: &'a str, text: &str) -> Self {
-        let mut line_starts = vec![0];
-        line_starts.extend(text.match_indices('\n').map(|(i, _)| i + 1));
-        Source { file, line_starts }
-    }
-
-    pub fn at(&self, span: Range<usize>) -> Location {
-        let line = self.line_starts.partition_point(|&s| s <= span.start).max(1);
-        let column = span.start - self.line_starts[line - 1] + 1;
-        Location { file: self.file.to_string(), line, column }
-    }
-}
 
 /// Builder state: the world so far and name tables.
 pub(super) struct Builder<'a> {
@@ -59,63 +40,33 @@ pub(super) struct Builder<'a> {
 /// A built shape: the shape, its pose in the body frame, its friction and its material name.
 type ShapeParts = (Shape, Isometry3<f64>, Option<f64>, Option<String>);
 
-pub(super) type R<T> = Result<T, SceneError>;
-
 impl Builder<'_> {
     pub(super) fn invalid(&self, span: &Range<usize>, field: &str, message: impl Into<String>) -> SceneError {
-        SceneError::Invalid {
-            at: self.src.at(span.clone()),
-            field: field.to_string(),
-            message: message.into(),
-        }
+        self.src.invalid(span, field, message)
     }
 
     fn model(&self, span: &Range<usize>, item: &str, e: impl Into<ModelError>) -> SceneError {
-        SceneError::Model {
-            at: self.src.at(span.clone()),
-            item: item.to_string(),
-            source: Box::new(e.into()),
-        }
+        self.src.model(span, item, e)
     }
 
     pub(super) fn finite(&self, span: &Range<usize>, field: &str, v: f64) -> R<f64> {
-        if v.is_finite() {
-            Ok(v)
-        } else {
-            Err(self.invalid(span, field, format!("{v} is not a finite number")))
-        }
+        self.src.finite(span, field, v)
     }
 
     pub(super) fn positive(&self, span: &Range<usize>, field: &str, v: f64) -> R<f64> {
-        if v.is_finite() && v > 0.0 {
-            Ok(v)
-        } else {
-            Err(self.invalid(span, field, format!("{v} must be a finite number > 0")))
-        }
+        self.src.positive(span, field, v)
     }
 
     fn non_negative(&self, span: &Range<usize>, field: &str, v: f64) -> R<f64> {
-        if v.is_finite() && v >= 0.0 {
-            Ok(v)
-        } else {
-            Err(self.invalid(span, field, format!("{v} must be a finite number ≥ 0")))
-        }
+        self.src.non_negative(span, field, v)
     }
 
     pub(super) fn vec3(&self, span: &Range<usize>, field: &str, v: [f64; 3]) -> R<Vector3<f64>> {
-        for c in v {
-            self.finite(span, field, c)?;
-        }
-        Ok(Vector3::from(v))
+        self.src.vec3(span, field, v)
     }
 
     fn unit3(&self, span: &Range<usize>, field: &str, v: [f64; 3]) -> R<Vector3<f64>> {
-        let v = self.vec3(span, field, v)?;
-        let n = v.norm();
-        if n < 1e-12 {
-            return Err(self.invalid(span, field, "the direction is zero"));
-        }
-        Ok(v / n)
+        self.src.unit3(span, field, v)
     }
 
     /// `rotation` (roll, pitch, yaw in degrees, `R = R_z(yaw) R_y(pitch) R_x(roll)`) or
@@ -298,7 +249,7 @@ impl Builder<'_> {
             "plane" => {
                 Shape::HalfSpace { normal: self.unit3(span, "normal", s.normal.unwrap_or([0.0, 0.0, 1.0]))? }
             }
-            k => super::terrain::shape(self, span, k, s)?,
+            k => super::terrain::shape(self.src, span, k, s)?,
         };
         let pose = Isometry3::from_parts(
             Translation3::from(self.vec3(span, "position", s.position)?),

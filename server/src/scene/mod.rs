@@ -34,6 +34,7 @@
 
 mod build;
 mod builtin;
+mod checks;
 mod controls;
 mod format;
 mod overrides;

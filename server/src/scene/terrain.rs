@@ -12,7 +12,7 @@ use std::ops::Range;
 
 use nalgebra::Vector3;
 
-use super::build::{Builder, R};
+use super::checks::{R, Source};
 use super::format::ShapeDef;
 use crate::dynamics::{Shape, terrain};
 
@@ -33,7 +33,7 @@ fn allowed(kind: &str) -> &'static [&'static str] {
     }
 }
 
-pub(crate) fn shape(b: &Builder, span: &Range<usize>, kind: &str, s: &ShapeDef) -> R<Shape> {
+pub(crate) fn shape(b: &Source, span: &Range<usize>, kind: &str, s: &ShapeDef) -> R<Shape> {
     if let Some(f) = s.stray_field(allowed(kind)) {
         return Err(b.invalid(span, f, format!("`{f}` does not apply to a {kind}")));
     }
@@ -41,7 +41,7 @@ pub(crate) fn shape(b: &Builder, span: &Range<usize>, kind: &str, s: &ShapeDef) 
         v.ok_or_else(|| b.invalid(span, field, format!("a {kind} needs `{field}`")))
             .and_then(|v| b.positive(span, field, v))
     };
-    let size = |b: &Builder| -> R<Vector3<f64>> {
+    let size = |b: &Source| -> R<Vector3<f64>> {
         let v = s.size.ok_or_else(|| b.invalid(span, "size", format!("a {kind} needs `size`")))?;
         b.vec3(span, "size", v)
     };
