@@ -109,15 +109,32 @@ impl Assembler {
     ) {
         let island_rows = islands.rows(k);
         let nb = islands.bodies(k).len();
-        let m = island_rows.len();
-        if self.row_local.len() < rows.len() {
-            self.row_local.resize(rows.len(), usize::MAX);
+        self.map_island_rows(island_rows, rows.len());
+        self.row_terms(island_rows, rows, islands, motion, nb);
+        self.index_rows_by_body(island_rows, rows, islands, motion, nb);
+        self.upper_triangle(island_rows, rows, islands, motion, h);
+    }
+
+    /// Points `row_local` from the world index of each island row to its island index.
+    fn map_island_rows(&mut self, island_rows: &[usize], world_rows: usize) {
+        if self.row_local.len() < world_rows {
+            self.row_local.resize(world_rows, usize::MAX);
         }
         for (i, &ri) in island_rows.iter().enumerate() {
             self.row_local[ri] = i;
         }
+    }
 
-        // M⁻¹ Jᵀ blocks, b, bounds, findex; count rows per body.
+    /// Per island row: the `M⁻¹ Jᵀ` blocks, `b`, bounds and findex; counts the rows at each of the
+    /// `nb` island bodies into `body_rows_start` (shifted by one, not yet summed).
+    fn row_terms(
+        &mut self,
+        island_rows: &[usize],
+        rows: &[ConstraintRow],
+        islands: &Islands,
+        motion: &[BodyMotion],
+        nb: usize,
+    ) {
         self.w.clear();
         self.b.clear();
         self.lo.clear();
@@ -143,6 +160,17 @@ impl Assembler {
             self.hi.push(r.hi);
             self.findex.push(r.findex.map(|f| self.row_local[f]));
         }
+    }
+
+    /// The per-body (row, block) lists in CSR form, from the counts of [`Assembler::row_terms`].
+    fn index_rows_by_body(
+        &mut self,
+        island_rows: &[usize],
+        rows: &[ConstraintRow],
+        islands: &Islands,
+        motion: &[BodyMotion],
+        nb: usize,
+    ) {
         for j in 0..nb {
             self.body_rows_start[j + 1] += self.body_rows_start[j];
         }
@@ -158,8 +186,18 @@ impl Assembler {
                 }
             }
         }
+    }
 
-        // A, row by row: the upper triangle, rows in order, columns sorted.
+    /// `A` into the triplet buffer, row by row: the upper triangle, rows in order, columns sorted.
+    fn upper_triangle(
+        &mut self,
+        island_rows: &[usize],
+        rows: &[ConstraintRow],
+        islands: &Islands,
+        motion: &[BodyMotion],
+        h: f64,
+    ) {
+        let m = island_rows.len();
         self.acc.clear();
         self.acc.resize(m, 0.0);
         self.stamp.clear();
