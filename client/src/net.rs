@@ -436,6 +436,19 @@ pub enum InputSink {
 }
 
 impl InputSink {
+    /// Where the frames go: Zenoh publishers (declared on first use), or the iceoryx2 `cmd` service
+    /// once the server subscribes to it.
+    pub fn open(transport: TransportKind, world: &WorldName, timeout: Duration) -> Result<InputSink> {
+        Ok(match transport {
+            TransportKind::Zenoh => InputSink::Zenoh { publishers: Vec::new() },
+            TransportKind::Iceoryx2 => {
+                let p = IoxInputs::open(world)?;
+                wait_iox_subscriber(&p, timeout)?;
+                InputSink::Iox(p)
+            }
+        })
+    }
+
     /// Publishes an encoded input frame on its topic.
     pub fn send(
         &mut self,
