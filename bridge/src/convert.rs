@@ -234,49 +234,12 @@ pub fn body_markers(body: &msgs::BodyInfo, out: &mut Vec<Marker>) {
                     }
                 }
             }
-            msgs::Shape::ConvexHull { vertices } => {
-                if vertices.len() <= HULL_TRIANGULATE_MAX {
-                    let mut m = marker(body, id, Marker::TRIANGLE_LIST, p, q);
-                    triangles(&mut m.points, vertices, hull_triangles(vertices).into_iter());
-                    out.push(m);
-                } else {
-                    let mut m = marker(body, id, Marker::SPHERE_LIST, p, q);
-                    m.scale = Vector3 { x: 0.02, y: 0.02, z: 0.02 };
-                    m.points = vertices.iter().map(|v| Point::from_array(*v)).collect();
-                    out.push(m);
-                }
-            }
+            msgs::Shape::ConvexHull { vertices } => out.push(hull_marker(body, id, p, q, vertices)),
             msgs::Shape::Heightfield { rows, cols, extent, heights: msgs::HeightData::Inline(h) } => {
-                let (rows, cols) = (*rows as usize, *cols as usize);
-                if rows < 2 || cols < 2 || h.len() != rows * cols {
-                    continue;
+                let grid = (*rows as usize, *cols as usize, *extent);
+                if let Some(m) = heightfield_marker(body, id, p, q, grid, h) {
+                    out.push(m);
                 }
-                let step = |n: usize| (n - 1).div_ceil(HEIGHTFIELD_MAX_SIDE - 1).max(1);
-                let idx = |n: usize, s: usize| {
-                    let mut v: Vec<usize> = (0..n).step_by(s).collect();
-                    if *v.last().unwrap_or(&0) != n - 1 {
-                        v.push(n - 1);
-                    }
-                    v
-                };
-                let (rs, cs) = (idx(rows, step(rows)), idx(cols, step(cols)));
-                let at = |r: usize, c: usize| {
-                    [
-                        -extent[0] / 2.0 + c as f64 * extent[0] / (cols - 1) as f64,
-                        -extent[1] / 2.0 + r as f64 * extent[1] / (rows - 1) as f64,
-                        h[r * cols + c],
-                    ]
-                };
-                let mut m = marker(body, id, Marker::TRIANGLE_LIST, p, q);
-                for w in rs.windows(2) {
-                    for u in cs.windows(2) {
-                        let (a, b, c, d) = (at(w[0], u[0]), at(w[0], u[1]), at(w[1], u[1]), at(w[1], u[0]));
-                        for v in [a, b, c, a, c, d] {
-                            m.points.push(Point::from_array(v));
-                        }
-                    }
-                }
-                out.push(m);
             }
             msgs::Shape::Heightfield { heights: msgs::HeightData::Reference(_), .. } => {}
             msgs::Shape::Trimesh { mesh: msgs::MeshData::Inline { vertices, triangles: tris } } => {
@@ -291,6 +254,62 @@ pub fn body_markers(body: &msgs::BodyInfo, out: &mut Vec<Marker>) {
             }
         }
     }
+}
+
+/// A convex hull's marker: its faces when it has few vertices, else its vertices as dots.
+fn hull_marker(body: &msgs::BodyInfo, id: i32, p: [f64; 3], q: [f64; 4], vertices: &[[f64; 3]]) -> Marker {
+    if vertices.len() <= HULL_TRIANGULATE_MAX {
+        let mut m = marker(body, id, Marker::TRIANGLE_LIST, p, q);
+        triangles(&mut m.points, vertices, hull_triangles(vertices).into_iter());
+        m
+    } else {
+        let mut m = marker(body, id, Marker::SPHERE_LIST, p, q);
+        m.scale = Vector3 { x: 0.02, y: 0.02, z: 0.02 };
+        m.points = vertices.iter().map(|v| Point::from_array(*v)).collect();
+        m
+    }
+}
+
+/// A heightfield's marker (`grid` = rows, cols, extent; `h` the heights): two triangles per cell
+/// of the grid thinned to at most `HEIGHTFIELD_MAX_SIDE` samples a side (edges kept); `None`
+/// unless the grid is at least 2 × 2 with one height per sample.
+fn heightfield_marker(
+    body: &msgs::BodyInfo,
+    id: i32,
+    p: [f64; 3],
+    q: [f64; 4],
+    (rows, cols, extent): (usize, usize, [f64; 2]),
+    h: &[f64],
+) -> Option<Marker> {
+    if rows < 2 || cols < 2 || h.len() != rows * cols {
+        return None;
+    }
+    let step = |n: usize| (n - 1).div_ceil(HEIGHTFIELD_MAX_SIDE - 1).max(1);
+    let idx = |n: usize, s: usize| {
+        let mut v: Vec<usize> = (0..n).step_by(s).collect();
+        if *v.last().unwrap_or(&0) != n - 1 {
+            v.push(n - 1);
+        }
+        v
+    };
+    let (rs, cs) = (idx(rows, step(rows)), idx(cols, step(cols)));
+    let at = |r: usize, c: usize| {
+        [
+            -extent[0] / 2.0 + c as f64 * extent[0] / (cols - 1) as f64,
+            -extent[1] / 2.0 + r as f64 * extent[1] / (rows - 1) as f64,
+            h[r * cols + c],
+        ]
+    };
+    let mut m = marker(body, id, Marker::TRIANGLE_LIST, p, q);
+    for w in rs.windows(2) {
+        for u in cs.windows(2) {
+            let (a, b, c, d) = (at(w[0], u[0]), at(w[0], u[1]), at(w[1], u[1]), at(w[1], u[0]));
+            for v in [a, b, c, a, c, d] {
+                m.points.push(Point::from_array(v));
+            }
+        }
+    }
+    Some(m)
 }
 
 /// `/pivotsim/markers`: a `DELETEALL` (when `clear`: the scene changed) followed by every body's

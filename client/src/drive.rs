@@ -23,7 +23,7 @@ use pivotsim_msgs as msgs;
 use pivotsim_msgs::Topic;
 
 use crate::keymap::{KeyAction, KeyState, Layout, key_name};
-use crate::net::{InputSink, IoxInputs, Stream, TransportKind, now_ns, wait_iox_subscriber};
+use crate::net::{InputSink, Stream, TransportKind, now_ns};
 use crate::{Common, interrupt, interrupted, secs};
 
 /// `drive` options.
@@ -194,19 +194,6 @@ fn check_axes(args: &Args) -> Result<()> {
         bail!("axis values must be in [-1, 1]");
     }
     Ok(())
-}
-
-/// Where the frames go: Zenoh publishers (declared on first use), or the iceoryx2 `cmd` service
-/// once the server subscribes to it.
-fn open_sink(args: &Args, world: &msgs::WorldName, timeout: Duration) -> Result<InputSink> {
-    Ok(match args.transport {
-        TransportKind::Zenoh => InputSink::Zenoh { publishers: Vec::new() },
-        TransportKind::Iceoryx2 => {
-            let p = IoxInputs::open(world)?;
-            wait_iox_subscriber(&p, timeout)?;
-            InputSink::Iox(p)
-        }
-    })
 }
 
 /// The drive loop's state: what is pressed, where the frames go, what was sent.
@@ -412,7 +399,7 @@ pub fn run(common: &Common, args: &Args) -> Result<ExitCode> {
     if !scripted && !tty && pad_name.is_none() {
         bail!("drive needs a terminal (keyboard), a gamepad, or --axes");
     }
-    let sink = open_sink(args, &world, timeout)?;
+    let sink = InputSink::open(args.transport, &world, timeout)?;
     // Stats for the status line (best effort).
     let stats =
         Stream::open(common, args.transport, &[Topic::Stats], 64, Duration::from_millis(2), None).ok();

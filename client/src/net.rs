@@ -274,20 +274,7 @@ impl IoxReceiver {
         tx: &InboxSender,
         poll: Duration,
     ) -> Result<IoxReceiver> {
-        // (topic, the topic to use for opening): inputs share the one `cmd` service, where the
-        // frame's own kind names the topic (`None`).
-        let mut names: Vec<(Option<Topic>, Topic)> = Vec::new();
-        for &t in topics {
-            match t {
-                Topic::Poses | Topic::Stats => names.push((Some(t), t)),
-                t if Topic::INPUTS.contains(&t) => {
-                    if !names.iter().any(|(known, _)| known.is_none()) {
-                        names.push((None, t));
-                    }
-                }
-                _ => bail!("iceoryx2 carries no {} service", t.suffix()),
-            }
-        }
+        let names = iox_topics(topics)?;
         let world = world.clone();
         let stop = Arc::new(AtomicBool::new(false));
         let (ready_tx, ready_rx) = sync_channel::<Result<()>>(1);
@@ -296,23 +283,7 @@ impl IoxReceiver {
         let thread = std::thread::Builder::new()
             .name("iox-recv".into())
             .spawn(move || {
-                let setup = || -> Result<_> {
-                    let node = iox_node()?;
-                    let mut subs = Vec::new();
-                    let mut services = Vec::new();
-                    for (topic, open_as) in &names {
-                        let s = iox_service(&node, &world, *open_as)?;
-                        let sub = s
-                            .subscriber_builder()
-                            .buffer_size(msgs::IOX_SUBSCRIBER_BUFFER)
-                            .create()
-                            .map_err(|e| iox_err(&format!("cannot subscribe to {}", s.name()))(&e))?;
-                        subs.push((*topic, sub));
-                        services.push(s);
-                    }
-                    Ok((node, services, subs))
-                };
-                let (node, services, subs) = match setup() {
+                let (node, services, subs) = match iox_subscribe(&world, &names) {
                     Ok(v) => {
                         let _ = ready_tx.send(Ok(()));
                         v
@@ -322,33 +293,7 @@ impl IoxReceiver {
                         return;
                     }
                 };
-                while !stop2.load(Ordering::Relaxed) {
-                    let mut any = false;
-                    for (topic, sub) in &subs {
-                        // Bounded per round so that one busy service cannot starve the others.
-                        for _ in 0..64 {
-                            match sub.receive() {
-                                Ok(Some(sample)) => {
-                                    let recv_ns = now_ns();
-                                    let bytes = sample.payload().to_vec();
-                                    // Inputs on `cmd`: the frame's own kind names the topic.
-                                    let topic = topic.or_else(|| input_topic(&bytes));
-                                    let _ = tx.offer(Received { topic, recv_ns, bytes });
-                                    any = true;
-                                }
-                                Ok(None) => break,
-                                Err(_) => break,
-                            }
-                        }
-                    }
-                    if !any {
-                        if poll.is_zero() {
-                            std::thread::yield_now();
-                        } else {
-                            std::thread::sleep(poll);
-                        }
-                    }
-                }
+                iox_poll(&subs, &tx, &stop2, poll);
                 drop(subs);
                 drop(services);
                 drop(node);
@@ -363,6 +308,81 @@ impl IoxReceiver {
             Err(_) => {
                 let _ = thread.join();
                 bail!("iceoryx2: the receiving thread stopped")
+            }
+        }
+    }
+}
+
+/// A subscriber of a byte service.
+type IoxSubscriber = iceoryx2::port::subscriber::Subscriber<ipc::Service, [u8], ()>;
+
+/// The node, the services and a subscriber per service (with the topic its frames carry).
+type IoxSubscriptions = (Node<ipc::Service>, Vec<IoxService>, Vec<(Option<Topic>, IoxSubscriber)>);
+
+/// The services `topics` need, as (the topic received frames carry, the topic to open): inputs
+/// share the one `cmd` service, where the frame's own kind names the topic (`None`).
+fn iox_topics(topics: &[Topic]) -> Result<Vec<(Option<Topic>, Topic)>> {
+    let mut names: Vec<(Option<Topic>, Topic)> = Vec::new();
+    for &t in topics {
+        match t {
+            Topic::Poses | Topic::Stats => names.push((Some(t), t)),
+            t if Topic::INPUTS.contains(&t) => {
+                if !names.iter().any(|(known, _)| known.is_none()) {
+                    names.push((None, t));
+                }
+            }
+            _ => bail!("iceoryx2 carries no {} service", t.suffix()),
+        }
+    }
+    Ok(names)
+}
+
+/// A subscriber on each service of `names` (from [`iox_topics`]), with the node and the services
+/// they live in.
+fn iox_subscribe(world: &WorldName, names: &[(Option<Topic>, Topic)]) -> Result<IoxSubscriptions> {
+    let node = iox_node()?;
+    let mut subs = Vec::new();
+    let mut services = Vec::new();
+    for (topic, open_as) in names {
+        let s = iox_service(&node, world, *open_as)?;
+        let sub = s
+            .subscriber_builder()
+            .buffer_size(msgs::IOX_SUBSCRIBER_BUFFER)
+            .create()
+            .map_err(|e| iox_err(&format!("cannot subscribe to {}", s.name()))(&e))?;
+        subs.push((*topic, sub));
+        services.push(s);
+    }
+    Ok((node, services, subs))
+}
+
+/// Hands the samples of `subs` to `tx` until `stop`, waiting `poll` (zero: yielding the CPU) after
+/// a round that found none.
+fn iox_poll(subs: &[(Option<Topic>, IoxSubscriber)], tx: &InboxSender, stop: &AtomicBool, poll: Duration) {
+    while !stop.load(Ordering::Relaxed) {
+        let mut any = false;
+        for (topic, sub) in subs {
+            // Bounded per round so that one busy service cannot starve the others.
+            for _ in 0..64 {
+                match sub.receive() {
+                    Ok(Some(sample)) => {
+                        let recv_ns = now_ns();
+                        let bytes = sample.payload().to_vec();
+                        // Inputs on `cmd`: the frame's own kind names the topic.
+                        let topic = topic.or_else(|| input_topic(&bytes));
+                        let _ = tx.offer(Received { topic, recv_ns, bytes });
+                        any = true;
+                    }
+                    Ok(None) => break,
+                    Err(_) => break,
+                }
+            }
+        }
+        if !any {
+            if poll.is_zero() {
+                std::thread::yield_now();
+            } else {
+                std::thread::sleep(poll);
             }
         }
     }
@@ -436,6 +456,19 @@ pub enum InputSink {
 }
 
 impl InputSink {
+    /// Where the frames go: Zenoh publishers (declared on first use), or the iceoryx2 `cmd` service
+    /// once the server subscribes to it.
+    pub fn open(transport: TransportKind, world: &WorldName, timeout: Duration) -> Result<InputSink> {
+        Ok(match transport {
+            TransportKind::Zenoh => InputSink::Zenoh { publishers: Vec::new() },
+            TransportKind::Iceoryx2 => {
+                let p = IoxInputs::open(world)?;
+                wait_iox_subscriber(&p, timeout)?;
+                InputSink::Iox(p)
+            }
+        })
+    }
+
     /// Publishes an encoded input frame on its topic.
     pub fn send(
         &mut self,

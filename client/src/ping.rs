@@ -78,27 +78,53 @@ impl Summary {
 
 /// Runs `ping`.
 pub fn run(common: &Common, args: &Args) -> Result<ExitCode> {
-    let idle = common.timeout_or(5.0);
     let poll = Duration::from_micros(args.poll_us);
     let stream = Stream::open(common, args.transport, &[Topic::Poses], 4096, poll, None)?;
-    let mut samples: Vec<f64> = Vec::with_capacity(args.count.min(1 << 20) as usize);
-    let mut malformed = 0u64;
-    let mut skipped = 0u64;
-    let mut negative = 0u64;
-    let mut last_seq: Option<u64> = None;
-    let mut repeats = 0u64;
-    let mut last_frame = Instant::now();
     let start = Instant::now();
     eprintln!(
         "pivotsim-client: ping over {:?}, world `{}`: {} pose frames after {} warm-up",
         args.transport, common.world, args.count, args.warmup
     );
-    while (samples.len() as u64) < args.count {
+    let mut sampled = sample(common, args, &stream)?;
+    let wall = start.elapsed().as_secs_f64();
+    let s = Summary::of(&mut sampled.samples);
+    if s.count == 0 {
+        bail!("no samples");
+    }
+    print_report(args, &s, &sampled, stream.inbox.dropped(), wall);
+    Ok(ExitCode::SUCCESS)
+}
+
+/// The latencies (µs) of `args.count` new pose frames after the warm-up, and what was passed over.
+struct Sampled {
+    samples: Vec<f64>,
+    /// Frames that did not parse.
+    malformed: u64,
+    /// Negative latencies (counted as 0).
+    negative: u64,
+    /// Frames of a step already seen.
+    repeats: u64,
+}
+
+/// Receives pose frames until `args.count` samples, Ctrl-C, or no frame for the idle timeout (an
+/// error when no sample came at all).
+fn sample(common: &Common, args: &Args, stream: &Stream) -> Result<Sampled> {
+    let idle = common.timeout_or(5.0);
+    let mut out = Sampled {
+        samples: Vec::with_capacity(args.count.min(1 << 20) as usize),
+        malformed: 0,
+        negative: 0,
+        repeats: 0,
+    };
+    let mut skipped = 0u64;
+    let mut last_seq: Option<u64> = None;
+    let mut last_frame = Instant::now();
+    while (out.samples.len() as u64) < args.count {
         if interrupted() {
             break;
         }
         if last_frame.elapsed() >= idle {
-            if samples.is_empty() {
+            if out.samples.is_empty() {
                 bail!(
                     "no pose frames for {:.1} s over {:?} (server running, not paused, world `{}`?)",
                     idle.as_secs_f64(),
@@ -111,13 +137,13 @@ pub fn run(common: &Common, args: &Args) -> Result<ExitCode> {
         }
         let Some(r) = stream.inbox.recv_timeout(Duration::from_millis(50)) else { continue };
         let Ok(v) = msgs::PoseFrameView::parse(&r.bytes) else {
-            malformed += 1;
+            out.malformed += 1;
             continue;
         };
         last_frame = Instant::now();
         if last_seq == Some(v.sequence()) {
             // The same step published again (a control request republishes): not a new sample.
-            repeats += 1;
+            out.repeats += 1;
             continue;
         }
         last_seq = Some(v.sequence());
@@ -127,15 +153,17 @@ pub fn run(common: &Common, args: &Args) -> Result<ExitCode> {
         }
         let lat_ns = r.recv_ns as i128 - v.wall_time_ns() as i128;
         if lat_ns < 0 {
-            negative += 1;
+            out.negative += 1;
         }
-        samples.push(lat_ns.max(0) as f64 / 1e3);
+        out.samples.push(lat_ns.max(0) as f64 / 1e3);
     }
-    let wall = start.elapsed().as_secs_f64();
-    let s = Summary::of(&mut samples);
-    if s.count == 0 {
-        bail!("no samples");
-    }
+    Ok(out)
+}
+
+/// Prints the summary `s` (one JSON object with `--json`, else lines and a histogram);
+/// `dropped` frames were lost over the inbox in `wall` seconds.
+fn print_report(args: &Args, s: &Summary, sampled: &Sampled, dropped: u64, wall: f64) {
+    let Sampled { samples, malformed, negative, repeats } = sampled;
     if args.json {
         println!(
             "{}",
@@ -143,29 +171,23 @@ pub fn run(common: &Common, args: &Args) -> Result<ExitCode> {
                 "transport": format!("{:?}", args.transport).to_lowercase(),
                 "count": s.count, "min_us": s.min, "p50_us": s.p50, "p90_us": s.p90,
                 "p99_us": s.p99, "max_us": s.max, "mean_us": s.mean,
-                "malformed": malformed, "dropped": stream.inbox.dropped(), "negative": negative,
+                "malformed": malformed, "dropped": dropped, "negative": negative,
             })
         );
     } else {
         println!(
             "ping over {:?}: {} pose frames in {:.1} s ({} malformed, {} dropped, {} repeated)",
-            args.transport,
-            s.count,
-            wall,
-            malformed,
-            stream.inbox.dropped(),
-            repeats
+            args.transport, s.count, wall, malformed, dropped, repeats
         );
         println!(
             "latency µs: min {:.1}  p50 {:.1}  p90 {:.1}  p99 {:.1}  max {:.1}  mean {:.1}",
             s.min, s.p50, s.p90, s.p99, s.max, s.mean
         );
-        if negative > 0 {
+        if *negative > 0 {
             println!("({negative} negative differences counted as 0: clocks differ? use ping on one host)");
         }
-        print!("{}", histogram(&samples, 50));
+        print!("{}", histogram(samples, 50));
     }
-    Ok(ExitCode::SUCCESS)
 }
 
 #[cfg(test)]

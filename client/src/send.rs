@@ -21,7 +21,7 @@ use anyhow::{Context, Result, anyhow, bail};
 use pivotsim_msgs as msgs;
 use pivotsim_msgs::Topic;
 
-use crate::net::{InputSink, IoxInputs, Stream, TransportKind, now_ns, wait_iox_subscriber};
+use crate::net::{InputSink, Stream, TransportKind, now_ns};
 use crate::{Common, interrupted, secs};
 
 /// `send` options.
@@ -220,19 +220,7 @@ pub fn run(common: &Common, args: &Args) -> Result<ExitCode> {
     let mut cmd = build(&args.what, scene.as_ref())?;
     stamp(&mut cmd, 1, 1);
     cmd.validate().map_err(|e| anyhow!("invalid command: {e}"))?;
-    match &scene {
-        Some(s) => {
-            if let Err(e) = s.check_input(&cmd) {
-                let names: Vec<&str> = s.actuators.iter().map(|a| a.name.as_str()).collect();
-                let msg = format!("{e} (scene `{}` has actuators: {})", s.scene, names.join(", "));
-                if !args.force {
-                    bail!("{msg}; --force sends it anyway");
-                }
-                eprintln!("pivotsim-client: warning: {msg}");
-            }
-        }
-        None => eprintln!("pivotsim-client: no scene description: the command is not checked"),
-    }
+    check_against_scene(scene.as_ref(), &cmd, args.force)?;
     let stats = if args.no_verify {
         None
     } else {
@@ -241,14 +229,7 @@ pub fn run(common: &Common, args: &Args) -> Result<ExitCode> {
     };
     let before = stats.as_ref().and_then(|s| latest_counters(s, Duration::from_millis(400)));
     let topic = topic_of(&cmd);
-    let mut sink = match args.transport {
-        TransportKind::Zenoh => InputSink::Zenoh { publishers: Vec::new() },
-        TransportKind::Iceoryx2 => {
-            let p = IoxInputs::open(&world)?;
-            wait_iox_subscriber(&p, timeout)?;
-            InputSink::Iox(p)
-        }
-    };
+    let mut sink = InputSink::open(args.transport, &world, timeout)?;
     let source = args.source_id.unwrap_or_else(crate::util::random_u32);
     let hold = args.hold.map(secs).unwrap_or_default();
     let period = secs(1.0 / args.rate.clamp(1.0, 1000.0));
@@ -271,25 +252,10 @@ pub fn run(common: &Common, args: &Args) -> Result<ExitCode> {
     let mut code = ExitCode::SUCCESS;
     match (&stats, before) {
         (Some(stats), Some(before)) => {
-            // Wait for the counters to account for every frame sent (or for the timeout).
-            let deadline = Instant::now() + timeout.min(Duration::from_secs(2));
-            let mut last = (0, Vec::new());
-            while Instant::now() < deadline && !interrupted() {
-                if let Some(c) = latest_counters(stats, Duration::from_millis(100)) {
-                    last = c.delta(&before);
-                    if last.0 + last.1.iter().map(|r| r.1).sum::<u64>() >= sent {
-                        break;
-                    }
-                }
-            }
-            let (acc, rej) = last;
-            line.push_str(&format!("; server: {acc} accepted"));
-            if !rej.is_empty() {
-                let r: Vec<String> = rej.iter().map(|(r, n)| format!("{n} {}", r.name())).collect();
-                line.push_str(&format!(", rejected: {}", r.join(", ")));
-                if acc == 0 {
-                    code = ExitCode::from(2);
-                }
+            let (verdict, rejected) = server_verdict(stats, &before, sent, timeout);
+            line.push_str(&verdict);
+            if rejected {
+                code = ExitCode::from(2);
             }
         }
         (Some(_), None) => line.push_str("; no stats frames (server paused?): outcome unknown"),
@@ -303,6 +269,54 @@ pub fn run(common: &Common, args: &Args) -> Result<ExitCode> {
     }
     println!("{line}");
     Ok(code)
+}
+
+/// Checks `cmd` against the scene description when there is one: an invalid command is an error,
+/// or with `force` a warning.
+fn check_against_scene(
+    scene: Option<&msgs::SceneDescription>,
+    cmd: &msgs::InputCommand,
+    force: bool,
+) -> Result<()> {
+    match scene {
+        Some(s) => {
+            if let Err(e) = s.check_input(cmd) {
+                let names: Vec<&str> = s.actuators.iter().map(|a| a.name.as_str()).collect();
+                let msg = format!("{e} (scene `{}` has actuators: {})", s.scene, names.join(", "));
+                if !force {
+                    bail!("{msg}; --force sends it anyway");
+                }
+                eprintln!("pivotsim-client: warning: {msg}");
+            }
+        }
+        None => eprintln!("pivotsim-client: no scene description: the command is not checked"),
+    }
+    Ok(())
+}
+
+/// The server's verdict on the `sent` frames, from its input counters since `before` (waiting until
+/// they account for every frame, at most `timeout` and 2 s): the text for the report line, and
+/// whether the frames were rejected with none accepted.
+fn server_verdict(stats: &Stream, before: &Counters, sent: u64, timeout: Duration) -> (String, bool) {
+    let deadline = Instant::now() + timeout.min(Duration::from_secs(2));
+    let mut last = (0, Vec::new());
+    while Instant::now() < deadline && !interrupted() {
+        if let Some(c) = latest_counters(stats, Duration::from_millis(100)) {
+            last = c.delta(before);
+            if last.0 + last.1.iter().map(|r| r.1).sum::<u64>() >= sent {
+                break;
+            }
+        }
+    }
+    let (acc, rej) = last;
+    let mut text = format!("; server: {acc} accepted");
+    let mut rejected = false;
+    if !rej.is_empty() {
+        let r: Vec<String> = rej.iter().map(|(r, n)| format!("{n} {}", r.name())).collect();
+        text.push_str(&format!(", rejected: {}", r.join(", ")));
+        rejected = acc == 0;
+    }
+    (text, rejected)
 }
 
 /// How long `send` keeps its iceoryx2 publisher after the last frame, for subscribers other than

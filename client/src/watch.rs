@@ -52,10 +52,28 @@ enum Mode {
     Json,
 }
 
+impl Mode {
+    /// JSON when asked for, else a table on a terminal unless `--plain`, else plain lines.
+    fn of(args: &Args) -> Mode {
+        let stdout_tty = std::io::stdout().is_terminal();
+        if args.json {
+            Mode::Json
+        } else if args.plain || !stdout_tty {
+            Mode::Plain
+        } else {
+            Mode::Table
+        }
+    }
+}
+
 struct View {
     mode: Mode,
     scene: Option<msgs::SceneDescription>,
     selected: Vec<u32>,
+    /// The body count and scene name `selected` was chosen for.
+    selected_for: Option<(usize, Option<String>)>,
+    /// When the scene description was last asked for again.
+    scene_tried: Instant,
     explicit: Vec<String>,
     max_bodies: usize,
     counts: FrameCounts,
@@ -66,6 +84,24 @@ struct View {
 }
 
 impl View {
+    /// A view with no body selected yet and nothing counted.
+    fn new(mode: Mode, scene: Option<msgs::SceneDescription>, common: &Common, args: &Args) -> View {
+        View {
+            mode,
+            scene,
+            selected: Vec::new(),
+            selected_for: None,
+            scene_tried: Instant::now(),
+            explicit: args.bodies.clone(),
+            max_bodies: args.max_bodies,
+            counts: FrameCounts::default(),
+            dropped: 0,
+            last_draw: None,
+            world: common.world.clone(),
+            transport: args.transport,
+        }
+    }
+
     /// Chooses the bodies shown once the first pose frame (or a new scene) is known.
     fn select(&mut self, v: &msgs::PoseFrameView<'_>) {
         let scene = self.scene.as_ref();
@@ -175,67 +211,21 @@ impl View {
         match stats {
             None => t.push_str("(no stats yet)\n"),
             Some(s) => {
-                t.push_str(&format!(
-                    "step wall {:9.1} µs   overruns {}   islands {}   rows {}   pivots {}   tight {}   solve {:.1} µs   max residual {:.2e}\n",
-                    s.step_wall_us,
-                    s.overruns,
-                    s.islands.len(),
-                    s.totals.rows,
-                    s.totals.pivot_steps,
-                    s.totals.tight,
-                    s.totals.solve_us,
-                    s.totals.residual_rel_max
-                ));
-                let rejected: Vec<String> = msgs::RejectReason::ALL
-                    .iter()
-                    .filter(|r| s.inputs.rejected_for(**r) > 0)
-                    .map(|r| format!("{} {}", r.name(), s.inputs.rejected_for(*r)))
-                    .collect();
-                t.push_str(&format!(
-                    "inputs accepted {}   rejected {}{}   deadman trips {}{}\n",
-                    s.inputs.accepted,
-                    s.inputs.rejected_total(),
-                    if rejected.is_empty() { String::new() } else { format!(" ({})", rejected.join(", ")) },
-                    s.inputs.deadman_trips,
-                    if s.inputs.deadman_active { "   DEADMAN ACTIVE (actuators at neutral)" } else { "" }
-                ));
-                t.push('\n');
-                t.push_str(&format!(
-                    "{:>6} {:<16} {:<10} {:>6} {:>6} {:>6} {:>6} {:>6} {:>10} {:>9}\n",
-                    "island",
-                    "variant",
-                    "status",
-                    "rows",
-                    "bodies",
-                    "pivots",
-                    "tight",
-                    "iters",
-                    "solve µs",
-                    "residual"
-                ));
-                const MAX_ISLAND_ROWS: usize = 10;
-                for (k, i) in s.islands.iter().take(MAX_ISLAND_ROWS).enumerate() {
-                    t.push_str(&format!(
-                        "{:>6} {:<16} {:<10} {:>6} {:>6} {:>6} {:>6} {:>6} {:>10.1} {:>9.1e}{}\n",
-                        k,
-                        i.variant.name(),
-                        i.status.name(),
-                        i.rows,
-                        i.bodies,
-                        i.pivot_steps,
-                        i.tight,
-                        i.iterations,
-                        i.solve_us,
-                        i.residual_rel,
-                        if i.fallback { "  fallback" } else { "" }
-                    ));
-                }
-                if s.islands.len() > MAX_ISLAND_ROWS {
-                    t.push_str(&format!("   … {} more islands\n", s.islands.len() - MAX_ISLAND_ROWS));
-                }
+                push_step_lines(&mut t, s);
+                push_island_table(&mut t, s);
             }
         }
         t.push('\n');
+        self.push_body_table(&mut t, v);
+        t.push_str(&format!(
+            "\nframes {} ok, {} malformed (skipped), {} dropped\n",
+            self.counts.ok, self.counts.malformed, self.dropped
+        ));
+        t
+    }
+
+    /// The table's rows of the selected bodies: position, Euler angles and speeds.
+    fn push_body_table(&self, t: &mut String, v: &msgs::PoseFrameView<'_>) {
         t.push_str(&format!(
             "{:<16} {:>9} {:>9} {:>9} {:>8} {:>8} {:>8} {:>8} {:>8}\n",
             "body", "x m", "y m", "z m", "roll°", "pitch°", "yaw°", "|v| m/s", "|ω| r/s"
@@ -259,24 +249,159 @@ impl View {
                 norm(b.angular_velocity)
             ));
         }
+    }
+
+    /// Re-reads the scene description when the body count says the scene changed (at most every
+    /// 2 s), and chooses the bodies shown again when the body count or the scene did change.
+    fn follow_scene(
+        &mut self,
+        v: &msgs::PoseFrameView<'_>,
+        common: &Common,
+        stream: &Stream,
+        scene_timeout: Duration,
+    ) {
+        if self.scene.as_ref().is_some_and(|s| s.bodies.len() != v.len())
+            && self.scene_tried.elapsed() >= Duration::from_secs(2)
+        {
+            self.scene_tried = Instant::now();
+            if let Some(s) = crate::util::scene_best_effort(common, stream.zenoh(), scene_timeout) {
+                self.scene = Some(s);
+            }
+        }
+        let key = (v.len(), self.scene.as_ref().map(|s| s.scene.clone()));
+        if self.selected_for.as_ref() != Some(&key) {
+            self.select(v);
+            self.selected_for = Some(key);
+        }
+    }
+}
+
+/// The table's step line (wall time, solver totals) and input-health line.
+fn push_step_lines(t: &mut String, s: &msgs::SolverStats) {
+    t.push_str(&format!(
+        "step wall {:9.1} µs   overruns {}   islands {}   rows {}   pivots {}   tight {}   solve {:.1} µs   max residual {:.2e}\n",
+        s.step_wall_us,
+        s.overruns,
+        s.islands.len(),
+        s.totals.rows,
+        s.totals.pivot_steps,
+        s.totals.tight,
+        s.totals.solve_us,
+        s.totals.residual_rel_max
+    ));
+    let rejected: Vec<String> = msgs::RejectReason::ALL
+        .iter()
+        .filter(|r| s.inputs.rejected_for(**r) > 0)
+        .map(|r| format!("{} {}", r.name(), s.inputs.rejected_for(*r)))
+        .collect();
+    t.push_str(&format!(
+        "inputs accepted {}   rejected {}{}   deadman trips {}{}\n",
+        s.inputs.accepted,
+        s.inputs.rejected_total(),
+        if rejected.is_empty() { String::new() } else { format!(" ({})", rejected.join(", ")) },
+        s.inputs.deadman_trips,
+        if s.inputs.deadman_active { "   DEADMAN ACTIVE (actuators at neutral)" } else { "" }
+    ));
+    t.push('\n');
+}
+
+/// The table's per-island solver rows (the first ten).
+fn push_island_table(t: &mut String, s: &msgs::SolverStats) {
+    t.push_str(&format!(
+        "{:>6} {:<16} {:<10} {:>6} {:>6} {:>6} {:>6} {:>6} {:>10} {:>9}\n",
+        "island", "variant", "status", "rows", "bodies", "pivots", "tight", "iters", "solve µs", "residual"
+    ));
+    const MAX_ISLAND_ROWS: usize = 10;
+    for (k, i) in s.islands.iter().take(MAX_ISLAND_ROWS).enumerate() {
         t.push_str(&format!(
-            "\nframes {} ok, {} malformed (skipped), {} dropped\n",
-            self.counts.ok, self.counts.malformed, self.dropped
+            "{:>6} {:<16} {:<10} {:>6} {:>6} {:>6} {:>6} {:>6} {:>10.1} {:>9.1e}{}\n",
+            k,
+            i.variant.name(),
+            i.status.name(),
+            i.rows,
+            i.bodies,
+            i.pivot_steps,
+            i.tight,
+            i.iterations,
+            i.solve_us,
+            i.residual_rel,
+            if i.fallback { "  fallback" } else { "" }
         ));
-        t
+    }
+    if s.islands.len() > MAX_ISLAND_ROWS {
+        t.push_str(&format!("   … {} more islands\n", s.islands.len() - MAX_ISLAND_ROWS));
+    }
+}
+
+/// Pose and stats frames paired into steps, and the steps shown.
+#[derive(Default)]
+struct Steps {
+    /// The last pose frame (sequence, bytes), waiting for its stats.
+    pending: Option<(u64, Vec<u8>)>,
+    /// The last stats frame.
+    stats: Option<msgs::SolverStats>,
+    shown: u64,
+    last_seq: Option<u64>,
+    gaps: crate::util::SequenceGaps,
+}
+
+impl Steps {
+    /// Whether `count` steps have been shown.
+    fn done(&self, count: Option<u64>) -> bool {
+        count.is_some_and(|c| self.shown >= c)
+    }
+
+    /// A pose frame of sequence `seq`: shows the pending step (it has no stats coming), then holds
+    /// this one; `true` when that completed `count` (the frame is then not held).
+    fn on_pose(&mut self, view: &mut View, seq: u64, bytes: Vec<u8>, count: Option<u64>) -> Result<bool> {
+        if let Some((_, p)) = self.pending.take() {
+            view.emit(&p, self.stats.as_ref(), false)?;
+            self.shown += 1;
+            if self.done(count) {
+                return Ok(true);
+            }
+        }
+        self.gaps.see(seq);
+        if self.last_seq.is_some_and(|s| seq < s) {
+            // Another server's stream (or a restarted server): sequences went back.
+            self.stats = None;
+        }
+        self.last_seq = Some(seq);
+        self.pending = Some((seq, bytes));
+        Ok(false)
+    }
+
+    /// A stats frame: shows the pending step when the stats are its own.
+    fn on_stats(&mut self, view: &mut View, s: msgs::SolverStats, count: Option<u64>) -> Result<()> {
+        let matches = self.pending.as_ref().is_some_and(|(seq, _)| *seq == s.sequence);
+        self.stats = Some(s);
+        if matches && let Some((_, p)) = self.pending.take() {
+            let last = count.is_some_and(|c| self.shown + 1 >= c);
+            view.emit(&p, self.stats.as_ref(), last)?;
+            self.shown += 1;
+        }
+        Ok(())
+    }
+
+    /// The closing line on stderr: steps shown, frames counted, and what was dropped where
+    /// (`inbox_dropped` frames over the inbox).
+    fn print_summary(&self, counts: &FrameCounts, inbox_dropped: u64) {
+        eprintln!(
+            "pivotsim-client: {} steps shown; {} frames ok, {} malformed (skipped), {} dropped \
+             ({} steps never arrived, {} frames over the inbox)",
+            self.shown,
+            counts.ok,
+            counts.malformed,
+            inbox_dropped + self.gaps.skipped,
+            self.gaps.skipped,
+            inbox_dropped
+        );
     }
 }
 
 /// Runs `watch`.
 pub fn run(common: &Common, args: &Args) -> Result<ExitCode> {
-    let stdout_tty = std::io::stdout().is_terminal();
-    let mode = if args.json {
-        Mode::Json
-    } else if args.plain || !stdout_tty {
-        Mode::Plain
-    } else {
-        Mode::Table
-    };
+    let mode = Mode::of(args);
     let poll = Duration::from_micros(500);
     let stream = Stream::open(common, args.transport, &[Topic::Poses, Topic::Stats], 1024, poll, None)?;
     let scene_timeout = common.timeout_or(2.0);
@@ -284,18 +409,7 @@ pub fn run(common: &Common, args: &Args) -> Result<ExitCode> {
     if scene.is_none() {
         eprintln!("pivotsim-client: no scene description (bodies shown by id)");
     }
-    let mut view = View {
-        mode,
-        scene,
-        selected: Vec::new(),
-        explicit: args.bodies.clone(),
-        max_bodies: args.max_bodies,
-        counts: FrameCounts::default(),
-        dropped: 0,
-        last_draw: None,
-        world: common.world.clone(),
-        transport: args.transport,
-    };
+    let mut view = View::new(mode, scene, common, args);
     if mode == Mode::Table {
         let mut out = std::io::stdout();
         crossterm::execute!(out, crossterm::terminal::Clear(crossterm::terminal::ClearType::All))?;
@@ -303,16 +417,9 @@ pub fn run(common: &Common, args: &Args) -> Result<ExitCode> {
     let idle = common.timeout.map(secs);
     let end = args.duration.map(|d| Instant::now() + secs(d));
     let mut last_frame = Instant::now();
-    let mut pending: Option<(u64, Vec<u8>)> = None;
-    let mut stats: Option<msgs::SolverStats> = None;
-    let mut shown = 0u64;
-    let mut last_seq: Option<u64> = None;
-    let mut gaps = crate::util::SequenceGaps::default();
-    let mut selected_for: Option<(usize, Option<String>)> = None;
-    let mut scene_tried = Instant::now();
-    let done = |shown: u64| args.count.is_some_and(|c| shown >= c);
+    let mut steps = Steps::default();
     let mut outcome = Ok(());
-    while !done(shown) {
+    while !steps.done(args.count) {
         if interrupted() {
             break;
         }
@@ -326,41 +433,18 @@ pub fn run(common: &Common, args: &Args) -> Result<ExitCode> {
             break;
         }
         let Some(r) = stream.inbox.recv_timeout(Duration::from_millis(50)) else { continue };
-        view.dropped = stream.inbox.dropped() + gaps.skipped;
+        view.dropped = stream.inbox.dropped() + steps.gaps.skipped;
         match r.topic {
             Some(Topic::Poses) => match msgs::PoseFrameView::parse(&r.bytes) {
                 Ok(v) => {
                     view.counts.ok += 1;
                     last_frame = Instant::now();
                     // A new scene (load/reset): the description and the selection change.
-                    if view.scene.as_ref().is_some_and(|s| s.bodies.len() != v.len())
-                        && scene_tried.elapsed() >= Duration::from_secs(2)
-                    {
-                        scene_tried = Instant::now();
-                        if let Some(s) = crate::util::scene_best_effort(common, stream.zenoh(), scene_timeout)
-                        {
-                            view.scene = Some(s);
-                        }
+                    view.follow_scene(&v, common, &stream, scene_timeout);
+                    let seq = v.sequence();
+                    if steps.on_pose(&mut view, seq, r.bytes, args.count)? {
+                        break;
                     }
-                    let key = (v.len(), view.scene.as_ref().map(|s| s.scene.clone()));
-                    if selected_for.as_ref() != Some(&key) {
-                        view.select(&v);
-                        selected_for = Some(key);
-                    }
-                    if let Some((_, p)) = pending.take() {
-                        view.emit(&p, stats.as_ref(), false)?;
-                        shown += 1;
-                        if done(shown) {
-                            break;
-                        }
-                    }
-                    gaps.see(v.sequence());
-                    if last_seq.is_some_and(|s| v.sequence() < s) {
-                        // Another server's stream (or a restarted server): sequences went back.
-                        stats = None;
-                    }
-                    last_seq = Some(v.sequence());
-                    pending = Some((v.sequence(), r.bytes));
                 }
                 Err(_) => view.counts.malformed += 1,
             },
@@ -368,34 +452,20 @@ pub fn run(common: &Common, args: &Args) -> Result<ExitCode> {
                 Ok(s) => {
                     view.counts.ok += 1;
                     last_frame = Instant::now();
-                    let matches = pending.as_ref().is_some_and(|(seq, _)| *seq == s.sequence);
-                    stats = Some(s);
-                    if matches && let Some((_, p)) = pending.take() {
-                        let last = args.count.is_some_and(|c| shown + 1 >= c);
-                        view.emit(&p, stats.as_ref(), last)?;
-                        shown += 1;
-                    }
+                    steps.on_stats(&mut view, s, args.count)?;
                 }
                 Err(_) => view.counts.malformed += 1,
             },
             _ => view.counts.malformed += 1,
         }
     }
-    if !done(shown)
-        && let Some((_, p)) = pending.take()
+    if !steps.done(args.count)
+        && let Some((_, p)) = steps.pending.take()
     {
-        view.emit(&p, stats.as_ref(), true)?;
-        shown += 1;
+        view.emit(&p, steps.stats.as_ref(), true)?;
+        steps.shown += 1;
     }
-    eprintln!(
-        "pivotsim-client: {shown} steps shown; {} frames ok, {} malformed (skipped), {} dropped \
-         ({} steps never arrived, {} frames over the inbox)",
-        view.counts.ok,
-        view.counts.malformed,
-        stream.inbox.dropped() + gaps.skipped,
-        gaps.skipped,
-        stream.inbox.dropped()
-    );
+    steps.print_summary(&view.counts, stream.inbox.dropped());
     if let Err(e) = outcome {
         bail!("{e} on world `{}` via {:?}", common.world, args.transport);
     }

@@ -91,10 +91,25 @@ pub(crate) struct Assembler {
     pub lambda: Vec<f64>,
 }
 
-/// Island-local index of the dynamic body in block `s` of `r`, if any.
-#[inline]
-fn dyn_local(r: &ConstraintRow, s: usize, islands: &Islands, motion: &[BodyMotion]) -> Option<usize> {
-    r.bodies[s].filter(|&i| motion[i].dynamic).map(|i| islands.local_index(i).expect("body in an island"))
+/// What the assembly stages read of the island being assembled and of the world.
+struct IslandInput<'a> {
+    /// World indices of the island's rows.
+    island_rows: &'a [usize],
+    /// Bodies in the island.
+    nb: usize,
+    /// Every row of the world.
+    rows: &'a [ConstraintRow],
+    islands: &'a Islands,
+    motion: &'a [BodyMotion],
+}
+
+impl IslandInput<'_> {
+    /// Island-local index of the dynamic body in block `s` of `r`, if any.
+    #[inline]
+    fn dyn_local(&self, r: &ConstraintRow, s: usize) -> Option<usize> {
+        let in_island = |i: usize| self.islands.local_index(i).expect("body in an island");
+        r.bodies[s].filter(|&i| self.motion[i].dynamic).map(in_island)
+    }
 }
 
 impl Assembler {
@@ -107,34 +122,44 @@ impl Assembler {
         motion: &[BodyMotion],
         h: f64,
     ) {
-        let island_rows = islands.rows(k);
-        let nb = islands.bodies(k).len();
-        let m = island_rows.len();
-        if self.row_local.len() < rows.len() {
-            self.row_local.resize(rows.len(), usize::MAX);
+        let isl =
+            IslandInput { island_rows: islands.rows(k), nb: islands.bodies(k).len(), rows, islands, motion };
+        self.map_island_rows(isl.island_rows, rows.len());
+        self.row_terms(&isl);
+        self.index_rows_by_body(&isl);
+        self.upper_triangle(&isl, h);
+    }
+
+    /// Points `row_local` from the world index of each island row to its island index.
+    fn map_island_rows(&mut self, island_rows: &[usize], world_rows: usize) {
+        if self.row_local.len() < world_rows {
+            self.row_local.resize(world_rows, usize::MAX);
         }
         for (i, &ri) in island_rows.iter().enumerate() {
             self.row_local[ri] = i;
         }
+    }
 
-        // M⁻¹ Jᵀ blocks, b, bounds, findex; count rows per body.
+    /// Per island row: the `M⁻¹ Jᵀ` blocks, `b`, bounds and findex; counts the rows at each island
+    /// body into `body_rows_start` (shifted by one, not yet summed).
+    fn row_terms(&mut self, isl: &IslandInput<'_>) {
         self.w.clear();
         self.b.clear();
         self.lo.clear();
         self.hi.clear();
         self.findex.clear();
         self.body_rows_start.clear();
-        self.body_rows_start.resize(nb + 1, 0);
-        for &ri in island_rows {
-            let r = &rows[ri];
+        self.body_rows_start.resize(isl.nb + 1, 0);
+        for &ri in isl.island_rows {
+            let r = &isl.rows[ri];
             let mut w = [Jac6::default(); MAX_ROW_BODIES];
             let mut jv = 0.0;
             for (s, ws) in w.iter_mut().enumerate() {
                 let Some(b) = r.bodies[s] else { continue };
-                jv += r.jac[s].dot(&motion[b].v, &motion[b].w);
-                if motion[b].dynamic {
-                    *ws = motion[b].apply_inv_mass(&r.jac[s]);
-                    self.body_rows_start[dyn_local(r, s, islands, motion).unwrap() + 1] += 1;
+                jv += r.jac[s].dot(&isl.motion[b].v, &isl.motion[b].w);
+                if isl.motion[b].dynamic {
+                    *ws = isl.motion[b].apply_inv_mass(&r.jac[s]);
+                    self.body_rows_start[isl.dyn_local(r, s).unwrap() + 1] += 1;
                 }
             }
             self.w.push(w);
@@ -143,34 +168,41 @@ impl Assembler {
             self.hi.push(r.hi);
             self.findex.push(r.findex.map(|f| self.row_local[f]));
         }
-        for j in 0..nb {
+    }
+
+    /// The per-body (row, block) lists in CSR form, from the counts of [`Assembler::row_terms`].
+    fn index_rows_by_body(&mut self, isl: &IslandInput<'_>) {
+        for j in 0..isl.nb {
             self.body_rows_start[j + 1] += self.body_rows_start[j];
         }
         self.fill.clear();
-        self.fill.extend_from_slice(&self.body_rows_start[..nb]);
+        self.fill.extend_from_slice(&self.body_rows_start[..isl.nb]);
         self.body_rows.clear();
-        self.body_rows.resize(self.body_rows_start[nb], (0, 0));
-        for (i, &ri) in island_rows.iter().enumerate() {
+        self.body_rows.resize(self.body_rows_start[isl.nb], (0, 0));
+        for (i, &ri) in isl.island_rows.iter().enumerate() {
             for s in 0..MAX_ROW_BODIES {
-                if let Some(b) = dyn_local(&rows[ri], s, islands, motion) {
+                if let Some(b) = isl.dyn_local(&isl.rows[ri], s) {
                     self.body_rows[self.fill[b]] = (i, s);
                     self.fill[b] += 1;
                 }
             }
         }
+    }
 
-        // A, row by row: the upper triangle, rows in order, columns sorted.
+    /// `A` into the triplet buffer, row by row: the upper triangle, rows in order, columns sorted.
+    fn upper_triangle(&mut self, isl: &IslandInput<'_>, h: f64) {
+        let m = isl.island_rows.len();
         self.acc.clear();
         self.acc.resize(m, 0.0);
         self.stamp.clear();
         self.stamp.resize(m, usize::MAX);
         self.triplets.clear();
         let inv_h2 = 1.0 / (h * h);
-        for (i, &ri) in island_rows.iter().enumerate() {
-            let r = &rows[ri];
+        for (i, &ri) in isl.island_rows.iter().enumerate() {
+            let r = &isl.rows[ri];
             self.touched.clear();
             for s in 0..MAX_ROW_BODIES {
-                let Some(b) = dyn_local(r, s, islands, motion) else { continue };
+                let Some(b) = isl.dyn_local(r, s) else { continue };
                 let j_i = &r.jac[s];
                 for &(j, sj) in &self.body_rows[self.body_rows_start[b]..self.body_rows_start[b + 1]] {
                     if j < i {

@@ -75,7 +75,7 @@ use super::joint_rows::push_joint_rows;
 use super::rows::{ConstraintRow, RowKey, RowKind, Side, WarmRow};
 use super::settings::{GeometricStiffness, WorldSettings};
 use super::stats::IslandStats;
-use crate::solver::{IndexState, Mlcp, Solver};
+use crate::solver::{IndexState, Mlcp, SolveStats, Solver};
 
 /// Reusable buffers of the step.
 #[derive(Debug, Default)]
@@ -191,6 +191,35 @@ fn side_of(bodies: &[RigidBody], v: &[Vector3<f64>], w: &[Vector3<f64>], id: Opt
     }
 }
 
+/// The statistics of island `k` (`bodies` bodies, `rows` rows) from its solve.
+fn island_stats(
+    k: usize,
+    bodies: usize,
+    rows: usize,
+    s: &SolveStats,
+    max_violation: f64,
+    assemble_us: f64,
+) -> IslandStats {
+    IslandStats {
+        island: k,
+        bodies,
+        rows,
+        nnz: s.nnz,
+        variant: s.variant,
+        status: s.status,
+        fallback: s.fallback,
+        pivot_steps: s.pivot_steps,
+        iterations: s.iterations,
+        tight: s.tight,
+        residual: s.residual,
+        residual_rel: s.residual_rel,
+        max_violation,
+        assemble_us,
+        solve_us: s.total_us,
+        projection_us: 0.0,
+    }
+}
+
 impl StepWorkspace {
     /// The warm-start record of a row (`None` for an item the cache has not seen).
     pub fn warm_row(&self, key: RowKey) -> Option<&WarmRow> {
@@ -287,19 +316,7 @@ impl StepWorkspace {
         let h = settings.timestep;
         let t = Instant::now();
         self.asm.assemble(k, &self.islands, &self.rows, &self.motion, h);
-        self.asm.lambda0.clear();
-        self.asm.index0.clear();
-        let mut max_violation: f64 = 0.0;
-        for &ri in self.islands.rows(k) {
-            let r = &self.rows[ri];
-            if r.kind == RowKind::Position {
-                max_violation = max_violation.max(r.phi.abs());
-            }
-            let w = self.warm_row(r.key).copied().unwrap_or_default();
-            let valid = step > 0 && w.stamp == step;
-            self.asm.lambda0.push(if valid { w.lambda } else { 0.0 });
-            self.asm.index0.push(if valid { w.state } else { IndexState::Free });
-        }
+        let max_violation = self.load_warm_start(k, step);
         let solved = self.stats.len();
         if self.solvers.len() <= solved {
             self.solvers.push(Solver::new(settings.solver));
@@ -316,29 +333,40 @@ impl StepWorkspace {
         }
         self.solvers[solved].set_deadline(deadline);
         let s = self.solvers[solved].solve(&self.problem, &mut self.asm.lambda);
-        let st = IslandStats {
-            island: k,
-            bodies: self.islands.bodies(k).len(),
-            rows: m,
-            nnz: s.nnz,
-            variant: s.variant,
-            status: s.status,
-            fallback: s.fallback,
-            pivot_steps: s.pivot_steps,
-            iterations: s.iterations,
-            tight: s.tight,
-            residual: s.residual,
-            residual_rel: s.residual_rel,
-            max_violation,
-            assemble_us,
-            solve_us: s.total_us,
-            projection_us: 0.0,
-        };
+        let st = island_stats(k, self.islands.bodies(k).len(), m, s, max_violation, assemble_us);
         self.asm.apply_impulses(k, &self.islands, &self.rows, &mut self.v_new, &mut self.w_new);
-        // Work the island's input rows did on its dynamic bodies (the watchdog's energy budget):
-        // motors, couplings, friction and force rows (velocity and force rows), and every row that
-        // reaches a kinematic or static body. Passive position rows between dynamic bodies are not
-        // inputs: energy they add is what the watchdog looks for.
+        self.add_input_work(k);
+        self.stat_of_island[k] = solved;
+        self.stats.push(st);
+        self.store_warm_start(k, solved, step);
+        Ok(())
+    }
+
+    /// Fills the assembler's warm start (`lambda0`, `index0`) of island `k` from the rows' records
+    /// of the last step; returns the island's largest position violation `|φ|`.
+    fn load_warm_start(&mut self, k: usize, step: u64) -> f64 {
+        self.asm.lambda0.clear();
+        self.asm.index0.clear();
+        let mut max_violation: f64 = 0.0;
+        for &ri in self.islands.rows(k) {
+            let r = &self.rows[ri];
+            if r.kind == RowKind::Position {
+                max_violation = max_violation.max(r.phi.abs());
+            }
+            let w = self.warm_row(r.key).copied().unwrap_or_default();
+            let valid = step > 0 && w.stamp == step;
+            self.asm.lambda0.push(if valid { w.lambda } else { 0.0 });
+            self.asm.index0.push(if valid { w.state } else { IndexState::Free });
+        }
+        max_violation
+    }
+
+    /// Adds the work the input rows of island `k` did on its dynamic bodies (the watchdog's energy
+    /// budget) to `input_work`.
+    fn add_input_work(&mut self, k: usize) {
+        // Inputs: motors, couplings, friction and force rows (velocity and force rows), and every
+        // row that reaches a kinematic or static body. Passive position rows between dynamic bodies
+        // are not inputs: energy they add is what the watchdog looks for.
         for (i, &ri) in self.islands.rows(k).iter().enumerate() {
             let r = &self.rows[ri];
             let input = r.kind != RowKind::Position || r.blocks().any(|(b, _)| !self.motion[b].dynamic);
@@ -351,8 +379,11 @@ impl StepWorkspace {
                 self.input_work += self.asm.lambda[i] * jv;
             }
         }
-        self.stat_of_island[k] = solved;
-        self.stats.push(st);
+    }
+
+    /// Records the impulses and index states of island `k` (solved by solver `solved`) as the warm
+    /// start of the next step.
+    fn store_warm_start(&mut self, k: usize, solved: usize, step: u64) {
         let states = self.solvers[solved].index_set();
         for (i, &ri) in self.islands.rows(k).iter().enumerate() {
             let state = states.get(i).copied().unwrap_or_default();
@@ -365,7 +396,6 @@ impl StepWorkspace {
             };
             *slot = WarmRow { stamp: step + 1, state, lambda };
         }
-        Ok(())
     }
 
     /// Rows of every enabled joint, coupling, spring and contact point at the current poses with

@@ -23,9 +23,9 @@ use super::format::*;
 use super::{Scene, SceneError};
 use crate::dynamics::{
     BodyBuilder, BodyId, ChainBuilder, ChainEnd, ChainShape, ColliderBuilder, CollisionGroups,
-    CouplingBuilder, ForceElement, FreeAxis, GeometricStiffness, JointBuilder, JointFrames, JointKind,
-    JointLimit, JointMotor, Material, ModelError, Shape, SpringDamper, WatchdogSettings, World,
-    WorldSettings, box_inertia, capsule_inertia, cylinder_inertia, sphere_inertia,
+    CouplingBuilder, CouplingId, ForceElement, FreeAxis, GeometricStiffness, JointBuilder, JointFrames,
+    JointId, JointKind, JointLimit, JointMotor, Material, ModelError, Shape, SpringDamper, WatchdogSettings,
+    World, WorldSettings, box_inertia, capsule_inertia, cylinder_inertia, sphere_inertia,
 };
 
 /// Builder state: the world so far and name tables.
@@ -781,142 +781,174 @@ fn actuators(b: &Builder, defs: &[Spanned<ActuatorDef>]) -> R<Controls> {
         if controls.names.contains_key(&d.name) {
             return Err(b.invalid(&span, "name", format!("actuator `{}` is already defined", d.name)));
         }
-        let kind = match d.kind.as_str() {
-            "velocity" => ActuatorKind::Velocity,
-            "position" => ActuatorKind::Position,
-            "brake" => ActuatorKind::Brake,
-            "clutch" => ActuatorKind::Clutch,
-            other => {
-                return Err(b.invalid(
-                    &span,
-                    "type",
-                    format!("unknown actuator type `{other}` (velocity, position, brake, clutch)"),
-                ));
-            }
-        };
-        let scales = d.scale.clone().unwrap_or_else(|| vec![1.0]);
-        if scales.len() != 1 && scales.len() != d.joints.len() {
-            return Err(b.invalid(&span, "scale", "give one scale, or one per joint"));
-        }
-        let mut targets = Vec::new();
-        for (k, n) in d.joints.iter().enumerate() {
-            let joint = b
-                .world
-                .joint_id(n)
-                .ok_or_else(|| b.invalid(&span, "joints", format!("no joint named `{n}`")))?;
-            let jk = b.world.joint(joint).map(|j| j.kind()).expect("joint exists");
-            let axis = match d.axis.as_deref() {
-                Some("linear") => FreeAxis::Linear,
-                Some("angular") => FreeAxis::Angular,
-                Some(other) => {
-                    return Err(b.invalid(
-                        &span,
-                        "axis",
-                        format!("unknown axis `{other}` (linear, angular)"),
-                    ));
-                }
-                None => jk.first_axis().ok_or_else(|| {
-                    b.invalid(
-                        &span,
-                        "joints",
-                        format!("joint `{n}` ({}) has no free axis to drive", jk.name()),
-                    )
-                })?,
-            };
-            if !jk.has_axis(axis) {
-                return Err(b.invalid(
-                    &span,
-                    "axis",
-                    format!("joint `{n}` ({}) has no {} axis", jk.name(), axis.name()),
-                ));
-            }
-            if !driven.insert((joint, axis)) {
-                return Err(b.invalid(
-                    &span,
-                    "joints",
-                    format!("joint `{n}` is already driven by another actuator"),
-                ));
-            }
-            let scale = scales[if scales.len() == 1 { 0 } else { k }];
-            if !(scale.is_finite() && scale != 0.0) {
-                return Err(b.invalid(&span, "scale", "scales must be finite and non-zero"));
-            }
-            targets.push(ActuatorTarget { joint, axis, scale });
-        }
-        let coupling = match (&d.coupling, kind) {
-            (Some(n), ActuatorKind::Clutch) => Some(
-                b.world
-                    .coupling_id(n)
-                    .ok_or_else(|| b.invalid(&span, "coupling", format!("no coupling named `{n}`")))?,
-            ),
-            (None, ActuatorKind::Clutch) => {
-                return Err(b.invalid(&span, "coupling", "a clutch needs `coupling`"));
-            }
-            (Some(_), _) => return Err(b.invalid(&span, "coupling", "only a clutch drives a coupling")),
-            (None, _) => {
-                if targets.is_empty() {
-                    return Err(b.invalid(&span, "joints", "an actuator needs at least one joint"));
-                }
-                None
-            }
-        };
-        let max_force = b.non_negative(&span, "max_force", d.max_force)?;
-        let max_speed = match d.max_speed {
-            Some(v) => b.positive(&span, "max_speed", v)?,
-            None => f64::INFINITY,
-        };
-        let unit = matches!(kind, ActuatorKind::Brake | ActuatorKind::Clutch);
-        let range = match d.range {
-            Some([lo, hi]) if !lo.is_nan() && !hi.is_nan() && lo <= hi => (lo, hi),
-            Some(_) => return Err(b.invalid(&span, "range", "range must be [low, high] with low ≤ high")),
-            None if unit => (0.0, 1.0),
-            None if kind == ActuatorKind::Velocity => (-1.0, 1.0),
-            None => (f64::NEG_INFINITY, f64::INFINITY),
-        };
-        if unit && (range.0 < 0.0 || range.1 > 1.0) {
-            return Err(b.invalid(&span, "range", "brakes and clutches take values in [0, 1]"));
-        }
-        let neutral = match (d.neutral, kind) {
-            (Some(v), _) => Neutral::Value(b.finite(&span, "neutral", v)?),
-            (None, ActuatorKind::Position) => Neutral::Hold,
-            (None, ActuatorKind::Brake) => Neutral::Value(1.0),
-            (None, _) => Neutral::Value(0.0),
-        };
-        let rate = d.rate.map(|r| b.positive(&span, "rate", r)).transpose()?;
-        if d.winch && kind != ActuatorKind::Velocity {
-            return Err(b.invalid(&span, "winch", "only a velocity actuator can be a winch"));
-        }
-        let mut act = Actuator {
-            name: d.name.clone(),
-            kind,
-            targets,
-            coupling,
-            max_force,
-            max_speed,
-            range,
-            neutral,
-            rate,
-            winch: d.winch,
-            value: 0.0,
-            applied: 0.0,
-            initial: 0.0,
-        };
-        let initial = match (d.initial, neutral) {
-            (Some(v), _) => b.finite(&span, "initial", v)?,
-            (None, Neutral::Value(v)) => v,
-            (None, Neutral::Hold) => {
-                let t = act.targets[0];
-                b.world.joint_axis_coordinate(t.joint, t.axis).unwrap_or(0.0) / t.scale
-            }
-        };
-        let initial = initial.clamp(range.0, range.1);
-        act.value = initial;
-        act.applied = initial;
-        act.initial = initial;
+        let act = actuator(b, &span, d, &mut driven)?;
         controls.names.insert(d.name.clone(), controls.actuators.len());
         controls.actuators.push(act);
     }
     Ok(controls)
+}
+
+/// One `[[actuator]]`, checked; `driven` holds the joint axes earlier actuators drive.
+fn actuator(
+    b: &Builder,
+    span: &Range<usize>,
+    d: &ActuatorDef,
+    driven: &mut HashSet<(JointId, FreeAxis)>,
+) -> R<Actuator> {
+    let kind = actuator_kind(b, span, &d.kind)?;
+    let targets = actuator_targets(b, span, d, driven)?;
+    let coupling = actuator_coupling(b, span, d.coupling.as_deref(), kind, &targets)?;
+    let max_force = b.non_negative(span, "max_force", d.max_force)?;
+    let max_speed = match d.max_speed {
+        Some(v) => b.positive(span, "max_speed", v)?,
+        None => f64::INFINITY,
+    };
+    let range = actuator_range(b, span, d.range, kind)?;
+    let neutral = match (d.neutral, kind) {
+        (Some(v), _) => Neutral::Value(b.finite(span, "neutral", v)?),
+        (None, ActuatorKind::Position) => Neutral::Hold,
+        (None, ActuatorKind::Brake) => Neutral::Value(1.0),
+        (None, _) => Neutral::Value(0.0),
+    };
+    let rate = d.rate.map(|r| b.positive(span, "rate", r)).transpose()?;
+    if d.winch && kind != ActuatorKind::Velocity {
+        return Err(b.invalid(span, "winch", "only a velocity actuator can be a winch"));
+    }
+    let initial = match (d.initial, neutral) {
+        (Some(v), _) => b.finite(span, "initial", v)?,
+        (None, Neutral::Value(v)) => v,
+        (None, Neutral::Hold) => {
+            let t = targets[0];
+            b.world.joint_axis_coordinate(t.joint, t.axis).unwrap_or(0.0) / t.scale
+        }
+    };
+    let initial = initial.clamp(range.0, range.1);
+    Ok(Actuator {
+        name: d.name.clone(),
+        kind,
+        targets,
+        coupling,
+        max_force,
+        max_speed,
+        range,
+        neutral,
+        rate,
+        winch: d.winch,
+        value: initial,
+        applied: initial,
+        initial,
+    })
+}
+
+/// An actuator's `type`.
+fn actuator_kind(b: &Builder, span: &Range<usize>, kind: &str) -> R<ActuatorKind> {
+    match kind {
+        "velocity" => Ok(ActuatorKind::Velocity),
+        "position" => Ok(ActuatorKind::Position),
+        "brake" => Ok(ActuatorKind::Brake),
+        "clutch" => Ok(ActuatorKind::Clutch),
+        other => Err(b.invalid(
+            span,
+            "type",
+            format!("unknown actuator type `{other}` (velocity, position, brake, clutch)"),
+        )),
+    }
+}
+
+/// An actuator's joint axes with their scales; each axis must exist and be driven by no other
+/// actuator (recorded in `driven`).
+fn actuator_targets(
+    b: &Builder,
+    span: &Range<usize>,
+    d: &ActuatorDef,
+    driven: &mut HashSet<(JointId, FreeAxis)>,
+) -> R<Vec<ActuatorTarget>> {
+    let scales = d.scale.clone().unwrap_or_else(|| vec![1.0]);
+    if scales.len() != 1 && scales.len() != d.joints.len() {
+        return Err(b.invalid(span, "scale", "give one scale, or one per joint"));
+    }
+    let mut targets = Vec::new();
+    for (k, n) in d.joints.iter().enumerate() {
+        let joint =
+            b.world.joint_id(n).ok_or_else(|| b.invalid(span, "joints", format!("no joint named `{n}`")))?;
+        let jk = b.world.joint(joint).map(|j| j.kind()).expect("joint exists");
+        let axis = match d.axis.as_deref() {
+            Some("linear") => FreeAxis::Linear,
+            Some("angular") => FreeAxis::Angular,
+            Some(other) => {
+                return Err(b.invalid(span, "axis", format!("unknown axis `{other}` (linear, angular)")));
+            }
+            None => jk.first_axis().ok_or_else(|| {
+                b.invalid(span, "joints", format!("joint `{n}` ({}) has no free axis to drive", jk.name()))
+            })?,
+        };
+        if !jk.has_axis(axis) {
+            return Err(b.invalid(
+                span,
+                "axis",
+                format!("joint `{n}` ({}) has no {} axis", jk.name(), axis.name()),
+            ));
+        }
+        if !driven.insert((joint, axis)) {
+            return Err(b.invalid(
+                span,
+                "joints",
+                format!("joint `{n}` is already driven by another actuator"),
+            ));
+        }
+        let scale = scales[if scales.len() == 1 { 0 } else { k }];
+        if !(scale.is_finite() && scale != 0.0) {
+            return Err(b.invalid(span, "scale", "scales must be finite and non-zero"));
+        }
+        targets.push(ActuatorTarget { joint, axis, scale });
+    }
+    Ok(targets)
+}
+
+/// The coupling a clutch drives (only a clutch has one); any other actuator needs a joint.
+fn actuator_coupling(
+    b: &Builder,
+    span: &Range<usize>,
+    coupling: Option<&str>,
+    kind: ActuatorKind,
+    targets: &[ActuatorTarget],
+) -> R<Option<CouplingId>> {
+    match (coupling, kind) {
+        (Some(n), ActuatorKind::Clutch) => Ok(Some(
+            b.world
+                .coupling_id(n)
+                .ok_or_else(|| b.invalid(span, "coupling", format!("no coupling named `{n}`")))?,
+        )),
+        (None, ActuatorKind::Clutch) => Err(b.invalid(span, "coupling", "a clutch needs `coupling`")),
+        (Some(_), _) => Err(b.invalid(span, "coupling", "only a clutch drives a coupling")),
+        (None, _) => {
+            if targets.is_empty() {
+                return Err(b.invalid(span, "joints", "an actuator needs at least one joint"));
+            }
+            Ok(None)
+        }
+    }
+}
+
+/// An actuator's value range: as given, or its kind's default; brakes and clutches stay in [0, 1].
+fn actuator_range(
+    b: &Builder,
+    span: &Range<usize>,
+    range: Option<[f64; 2]>,
+    kind: ActuatorKind,
+) -> R<(f64, f64)> {
+    let unit = matches!(kind, ActuatorKind::Brake | ActuatorKind::Clutch);
+    let range = match range {
+        Some([lo, hi]) if !lo.is_nan() && !hi.is_nan() && lo <= hi => (lo, hi),
+        Some(_) => return Err(b.invalid(span, "range", "range must be [low, high] with low ≤ high")),
+        None if unit => (0.0, 1.0),
+        None if kind == ActuatorKind::Velocity => (-1.0, 1.0),
+        None => (f64::NEG_INFINITY, f64::INFINITY),
+    };
+    if unit && (range.0 < 0.0 || range.1 > 1.0) {
+        return Err(b.invalid(span, "range", "brakes and clutches take values in [0, 1]"));
+    }
+    Ok(range)
 }
 
 fn event(b: &Builder, span: &Range<usize>, kind: &str, joint: Option<&str>) -> R<SceneEvent> {

@@ -82,6 +82,21 @@ fn collider(shape: &Shape, pose: &Isometry3<f64>, out: &mut Vec<msgs::Collider>)
 /// The wire description of `scene` in world `world`.
 pub fn describe(scene: &Scene, world_name: &str) -> msgs::SceneDescription {
     let w: &World = &scene.world;
+    let g = w.settings().gravity;
+    msgs::SceneDescription {
+        world: world_name.to_string(),
+        scene: scene.name.clone(),
+        timestep: w.settings().timestep,
+        gravity: [g.x, g.y, g.z],
+        bodies: body_infos(w),
+        joints: joint_infos(w),
+        actuators: actuator_infos(scene),
+        joystick: joystick_bindings(scene),
+    }
+}
+
+/// Every body with its kind, mass and colliders.
+fn body_infos(w: &World) -> Vec<msgs::BodyInfo> {
     let mut bodies: Vec<msgs::BodyInfo> = w
         .bodies()
         .iter()
@@ -101,8 +116,12 @@ pub fn describe(scene: &Scene, world_name: &str) -> msgs::SceneDescription {
     for c in w.colliders() {
         collider(c.shape(), &c.offset(), &mut bodies[c.body().index()].colliders);
     }
-    let joints = w
-        .joints()
+    bodies
+}
+
+/// The joint tree: every joint with its kind, parent and child body.
+fn joint_infos(w: &World) -> Vec<msgs::JointInfo> {
+    w.joints()
         .iter()
         .map(|j| msgs::JointInfo {
             name: j.name().to_string(),
@@ -116,8 +135,13 @@ pub fn describe(scene: &Scene, world_name: &str) -> msgs::SceneDescription {
             parent: j.body_b().map(|b| b.0),
             child: j.body_a().0,
         })
-        .collect();
-    let actuators = scene
+        .collect()
+}
+
+/// Every actuator with its joint, wire mode and limits in wire units.
+fn actuator_infos(scene: &Scene) -> Vec<msgs::ActuatorInfo> {
+    let w: &World = &scene.world;
+    scene
         .controls
         .actuators()
         .iter()
@@ -137,7 +161,11 @@ pub fn describe(scene: &Scene, world_name: &str) -> msgs::SceneDescription {
                 limits,
             }
         })
-        .collect();
+        .collect()
+}
+
+/// The default joystick bindings in wire units: the stick axes, then the buttons that set a value.
+fn joystick_bindings(scene: &Scene) -> Vec<msgs::JoystickBinding> {
     let acts = scene.controls.actuators();
     let mut joystick: Vec<msgs::JoystickBinding> = scene
         .joystick
@@ -168,15 +196,5 @@ pub fn describe(scene: &Scene, world_name: &str) -> msgs::SceneDescription {
             });
         }
     }
-    let g = w.settings().gravity;
-    msgs::SceneDescription {
-        world: world_name.to_string(),
-        scene: scene.name.clone(),
-        timestep: w.settings().timestep,
-        gravity: [g.x, g.y, g.z],
-        bodies,
-        joints,
-        actuators,
-        joystick,
-    }
+    joystick
 }

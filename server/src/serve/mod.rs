@@ -358,10 +358,7 @@ fn serve_loop(
     let mut overruns = 0u64;
     let mut counted_drops = 0u64;
     let mut next = Instant::now();
-    let mut last_status = Instant::now();
-    let mut status_steps = 0u64;
-    let mut status_sim = engine.scene().world.time();
-    let mut status_solve_us = 0.0;
+    let mut status = StatusWindow::new(engine);
     for t in transports.iter_mut() {
         t.set_description(engine.description());
         t.publish(engine.pose_frame(), engine.stats_frame());
@@ -370,21 +367,7 @@ fn serve_loop(
         for t in transports.iter_mut() {
             t.poll(tx);
         }
-        let mut described = false;
-        let mut republish = false;
-        while let Some(item) = rx.try_recv() {
-            match item {
-                Inbound::Input { topic, bytes } => {
-                    let _ = engine.handle_input(topic, &bytes, Instant::now());
-                }
-                Inbound::Control { bytes, reply } => {
-                    let (generation, seq) = (engine.generation(), engine.sequence());
-                    reply(engine.handle_control(&bytes));
-                    described |= engine.generation() != generation;
-                    republish |= described || engine.sequence() != seq;
-                }
-            }
-        }
+        let (described, republish) = drain_inbox(engine, rx);
         let d = rx.dropped();
         while counted_drops < d {
             engine.count_dropped();
@@ -408,50 +391,16 @@ fn serve_loop(
         }
         if stepped {
             steps += 1;
-            status_steps += 1;
-            status_solve_us += engine.scene().world.island_stats().iter().map(|s| s.solve_us).sum::<f64>();
+            status.record_step(engine);
         }
-        if config.status_interval.is_some_and(|iv| last_status.elapsed() >= iv) {
-            let dt = last_status.elapsed().as_secs_f64();
-            let sim = engine.scene().world.time();
-            let mut line = format!(
-                "t = {sim:8.2} s  rtf {:5.2}  solve {:7.1} µs/step  inputs {} ok / {} rejected{}",
-                (sim - status_sim) / dt,
-                status_solve_us / status_steps.max(1) as f64,
-                engine.health().accepted,
-                engine.health().rejected_total(),
-                if engine.health().deadman_active { "  DEADMAN" } else { "" },
-            );
-            for t in transports.iter_mut() {
-                line.push_str("  ");
-                line.push_str(&t.status());
-            }
-            if std::io::stderr().is_terminal() {
-                eprintln!("{line}");
-            } else {
-                info!("{line}");
-            }
-            (last_status, status_steps, status_sim, status_solve_us) = (Instant::now(), 0, sim, 0.0);
-        }
+        status.report_if_due(config.status_interval, engine, transports);
         // Pacing (none after the last step of a bounded run).
         if config.max_steps.is_some_and(|m| steps >= m) {
             break;
         }
         let Some(rtf) = config.realtime_factor else { continue };
-        // A scene loaded later may have another h: its period is held to the same bound.
-        let period = step_period(engine.scene().world.settings().timestep, rtf).unwrap_or(MAX_STEP_PERIOD);
-        next += period;
-        let now = Instant::now();
-        if now > next {
-            if stepped {
-                overruns += 1;
-                engine.count_overrun();
-            }
-            if now - next > period * MAX_CATCH_UP {
-                next = now;
-            }
-        } else {
-            sleep_until(next, shutdown);
+        if pace(&mut next, rtf, stepped, engine, shutdown) {
+            overruns += 1;
         }
     }
     ServeReport {
@@ -460,6 +409,105 @@ fn serve_loop(
         wall_s: start.elapsed().as_secs_f64(),
         sim_time: engine.scene().world.time(),
         inputs: *engine.health(),
+    }
+}
+
+/// Hands every waiting input and control request to the engine; returns whether a request
+/// changed the scene description and whether one changed what the frames show.
+fn drain_inbox(engine: &mut Engine, rx: &pivotsim_link::Inbox<Inbound>) -> (bool, bool) {
+    let mut described = false;
+    let mut republish = false;
+    while let Some(item) = rx.try_recv() {
+        match item {
+            Inbound::Input { topic, bytes } => {
+                let _ = engine.handle_input(topic, &bytes, Instant::now());
+            }
+            Inbound::Control { bytes, reply } => {
+                let (generation, seq) = (engine.generation(), engine.sequence());
+                reply(engine.handle_control(&bytes));
+                described |= engine.generation() != generation;
+                republish |= described || engine.sequence() != seq;
+            }
+        }
+    }
+    (described, republish)
+}
+
+/// Waits until step `next` (advanced by one period at real-time factor `rtf`) is due; when it is
+/// already late, counts an overrun if a step ran (returns `true`) and drops a backlog of more than
+/// [`MAX_CATCH_UP`] periods.
+fn pace(next: &mut Instant, rtf: f64, stepped: bool, engine: &mut Engine, shutdown: &AtomicBool) -> bool {
+    // A scene loaded later may have another h: its period is held to the same bound.
+    let period = step_period(engine.scene().world.settings().timestep, rtf).unwrap_or(MAX_STEP_PERIOD);
+    *next += period;
+    let now = Instant::now();
+    let mut overrun = false;
+    if now > *next {
+        if stepped {
+            overrun = true;
+            engine.count_overrun();
+        }
+        if now - *next > period * MAX_CATCH_UP {
+            *next = now;
+        }
+    } else {
+        sleep_until(*next, shutdown);
+    }
+    overrun
+}
+
+/// The steps since the last status line: their count, solve time and the simulation time at the
+/// line.
+struct StatusWindow {
+    since: Instant,
+    steps: u64,
+    sim: f64,
+    solve_us: f64,
+}
+
+impl StatusWindow {
+    /// A window opening now.
+    fn new(engine: &Engine) -> Self {
+        StatusWindow { since: Instant::now(), steps: 0, sim: engine.scene().world.time(), solve_us: 0.0 }
+    }
+
+    /// Counts the step just taken and its islands' solve time.
+    fn record_step(&mut self, engine: &Engine) {
+        self.steps += 1;
+        self.solve_us += engine.scene().world.island_stats().iter().map(|s| s.solve_us).sum::<f64>();
+    }
+
+    /// Prints the status line (stderr on a terminal, else the log) once `interval` has passed since
+    /// the last, and opens a new window.
+    fn report_if_due(
+        &mut self,
+        interval: Option<Duration>,
+        engine: &Engine,
+        transports: &mut [Box<dyn Transport>],
+    ) {
+        if interval.is_none_or(|iv| self.since.elapsed() < iv) {
+            return;
+        }
+        let dt = self.since.elapsed().as_secs_f64();
+        let sim = engine.scene().world.time();
+        let mut line = format!(
+            "t = {sim:8.2} s  rtf {:5.2}  solve {:7.1} µs/step  inputs {} ok / {} rejected{}",
+            (sim - self.sim) / dt,
+            self.solve_us / self.steps.max(1) as f64,
+            engine.health().accepted,
+            engine.health().rejected_total(),
+            if engine.health().deadman_active { "  DEADMAN" } else { "" },
+        );
+        for t in transports.iter_mut() {
+            line.push_str("  ");
+            line.push_str(&t.status());
+        }
+        if std::io::stderr().is_terminal() {
+            eprintln!("{line}");
+        } else {
+            info!("{line}");
+        }
+        *self = StatusWindow { since: Instant::now(), steps: 0, sim, solve_us: 0.0 };
     }
 }
 

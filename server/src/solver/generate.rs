@@ -2,6 +2,8 @@
 //! in a seed. A test and benchmark utility (`bench-solver`, the solver's tests), not used by the
 //! simulation itself.
 
+use std::collections::BTreeMap;
+
 use rand::seq::SliceRandom;
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -38,6 +40,13 @@ fn jac_block(d: V3, r: V3, sign: f64) -> [f64; 6] {
     [sign * d[0], sign * d[1], sign * d[2], sign * a[0], sign * a[1], sign * a[2]]
 }
 
+/// Time step `h` of the generated problems.
+const H: f64 = 1.0 / 60.0;
+/// Constraint compliance `c` of the generated problems (adds `c/h²` to the diagonal).
+const COMPLIANCE: f64 = 1e-8;
+/// Gravity, m/s².
+const G: f64 = 9.81;
+
 /// A banded contact-like MLCP of about `m_target` rows: a serial chain of rigid bodies (6 DOF,
 /// masses log-uniform in `[1, mass_ratio]`, diagonal inertia of random boxes) with ball joints
 /// between neighbours (3 bilateral rows, blocks `[I, −[r]×]` with random lever arms) and frictional
@@ -47,15 +56,21 @@ fn jac_block(d: V3, r: V3, sign: f64) -> [f64; 6] {
 /// velocities, so some contacts separate and some friction rows slide. The rows are finally
 /// shuffled by a random symmetric permutation (Cuthill–McKee has work to do).
 pub fn contact_like(m_target: usize, seed: u64, mass_ratio: f64) -> Mlcp {
-    const H: f64 = 1.0 / 60.0;
-    const COMPLIANCE: f64 = 1e-8;
-    const G: f64 = 9.81;
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     // 3 joint rows per link and 3 contact rows on half of the bodies: about 4.5 rows per body.
     let nb = ((m_target as f64 + 3.0) / 4.5).round().max(2.0) as usize;
-    let ln_ratio = mass_ratio.max(1.0).ln();
+    let (minv, vel) = random_bodies(nb, mass_ratio, &mut rng);
+    let mut rows: Vec<GenRow> = Vec::with_capacity(m_target + 8);
+    push_ball_joints(nb, &mut rng, &mut rows);
+    push_ground_contacts(nb, &mut rng, &mut rows);
+    let entries = assemble_a(&rows, &minv);
+    let b = rhs(&rows, &vel);
+    permuted_mlcp(&rows, &entries, &b, &mut rng)
+}
 
-    // Bodies: inverse mass matrix diagonal and velocity (linear, angular).
+/// `nb` random bodies: the diagonal of each inverse mass matrix and each velocity (linear, angular).
+fn random_bodies(nb: usize, mass_ratio: f64, rng: &mut ChaCha8Rng) -> (Vec<[f64; 6]>, Vec<[f64; 6]>) {
+    let ln_ratio = mass_ratio.max(1.0).ln();
     let mut minv: Vec<[f64; 6]> = Vec::with_capacity(nb);
     let mut vel: Vec<[f64; 6]> = Vec::with_capacity(nb);
     for _ in 0..nb {
@@ -81,9 +96,11 @@ pub fn contact_like(m_target: usize, seed: u64, mass_ratio: f64) -> Mlcp {
         }
         vel.push(v);
     }
+    (minv, vel)
+}
 
-    let mut rows: Vec<GenRow> = Vec::with_capacity(m_target + 8);
-    // Ball joints between neighbours.
+/// Three bilateral rows of a ball joint between each pair of neighbours, random lever arms.
+fn push_ball_joints(nb: usize, rng: &mut ChaCha8Rng, rows: &mut Vec<GenRow>) {
     let axes: [V3; 3] = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
     for k in 0..nb - 1 {
         let ra: V3 = [rng.random_range(0.3..0.7), rng.random_range(-0.2..0.2), rng.random_range(-0.2..0.2)];
@@ -97,9 +114,13 @@ pub fn contact_like(m_target: usize, seed: u64, mass_ratio: f64) -> Mlcp {
             });
         }
     }
-    // Ground contacts on a random half of the bodies.
+}
+
+/// A frictional ground contact (normal row and two friction rows, `μ = 1`) on a random half of the
+/// bodies.
+fn push_ground_contacts(nb: usize, rng: &mut ChaCha8Rng, rows: &mut Vec<GenRow>) {
     let mut which: Vec<usize> = (0..nb).collect();
-    which.shuffle(&mut rng);
+    which.shuffle(rng);
     which.truncate(nb / 2);
     which.sort_unstable();
     for &k in &which {
@@ -125,16 +146,17 @@ pub fn contact_like(m_target: usize, seed: u64, mass_ratio: f64) -> Mlcp {
             });
         }
     }
-    let m = rows.len();
+}
 
-    // A = J M⁻¹ Jᵀ + c/h² I, assembled per body.
-    let mut per_body: Vec<Vec<(usize, [f64; 6])>> = vec![Vec::new(); nb];
+/// The entries of `A = J M⁻¹ Jᵀ + c/h² I`, assembled per body.
+fn assemble_a(rows: &[GenRow], minv: &[[f64; 6]]) -> BTreeMap<(usize, usize), f64> {
+    let mut per_body: Vec<Vec<(usize, [f64; 6])>> = vec![Vec::new(); minv.len()];
     for (i, row) in rows.iter().enumerate() {
         for &(b, j) in &row.blocks {
             per_body[b].push((i, j));
         }
     }
-    let mut entries: std::collections::BTreeMap<(usize, usize), f64> = std::collections::BTreeMap::new();
+    let mut entries: BTreeMap<(usize, usize), f64> = BTreeMap::new();
     for (b, list) in per_body.iter().enumerate() {
         let w = &minv[b];
         for &(i, ji) in list {
@@ -144,12 +166,15 @@ pub fn contact_like(m_target: usize, seed: u64, mass_ratio: f64) -> Mlcp {
             }
         }
     }
-    for i in 0..m {
+    for i in 0..rows.len() {
         *entries.entry((i, i)).or_insert(0.0) += COMPLIANCE / (H * H);
     }
-    // b = −J (v + h M⁻¹ f_gravity); M⁻¹ f_gravity = (0, 0, −g, 0, 0, 0) for every body.
-    let b: Vec<f64> = rows
-        .iter()
+    entries
+}
+
+/// `b = −J (v + h M⁻¹ f_gravity)`; `M⁻¹ f_gravity = (0, 0, −g, 0, 0, 0)` for every body.
+fn rhs(rows: &[GenRow], vel: &[[f64; 6]]) -> Vec<f64> {
+    rows.iter()
         .map(|row| {
             -row.blocks
                 .iter()
@@ -160,11 +185,20 @@ pub fn contact_like(m_target: usize, seed: u64, mass_ratio: f64) -> Mlcp {
                 })
                 .sum::<f64>()
         })
-        .collect();
+        .collect()
+}
 
-    // Random symmetric permutation: old row i becomes new_of[i].
+/// The MLCP of `rows`, `A`'s `entries` and `b`, shuffled by a random symmetric permutation.
+fn permuted_mlcp(
+    rows: &[GenRow],
+    entries: &BTreeMap<(usize, usize), f64>,
+    b: &[f64],
+    rng: &mut ChaCha8Rng,
+) -> Mlcp {
+    let m = rows.len();
+    // Old row i becomes new_of[i].
     let mut new_of: Vec<usize> = (0..m).collect();
-    new_of.shuffle(&mut rng);
+    new_of.shuffle(rng);
     let triplets: Vec<(usize, usize, f64)> =
         entries.iter().map(|(&(i, j), &v)| (new_of[i], new_of[j], v)).collect();
     let mut bp = vec![0.0; m];

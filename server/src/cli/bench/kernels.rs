@@ -102,94 +102,22 @@ pub struct EnvelopeKernel {
 
 pub fn envelope_kernel(name: &str, a: &SymCsr, plan: &Plan, seed: u64) -> EnvelopeKernel {
     let m = a.n();
-    let (tu, reps) = (plan.kernel_target_us, plan.kernel_repeats);
-    let mut ws = OrderingWorkspace::new();
-    let (mut perm, mut inv) = (Vec::new(), Vec::new());
-    ws.order(a, OrderingKind::ReverseCuthillMcKee, &mut perm, &mut inv);
-    let mut ap = SymCsr::default();
-    ap.permuted_from(a, &perm, &inv);
-    let mut env = Envelope::new();
-    env.build(&ap);
-    let maxd = ap.max_diag();
-    let mut mask = vec![false; m];
-    let mut l0 = vec![0.0; env.len()];
-    env.factor_from(&ap, &mask, &mut l0, 0, maxd);
-    let mut l = l0.clone();
-    let mut sigma = vec![0.0; m];
-
-    let factor_us = time_us(tu, reps, || {
-        env.factor_from(&ap, &mask, &mut l, 0, maxd);
-        black_box(&mut l);
-    });
-    let copy_us = time_us(tu, reps, || {
-        l.copy_from_slice(&l0);
-        black_box(&mut l);
-    });
-    let k = 8.min(m);
-    let mut deletions = Vec::with_capacity(k);
-    for q in 0..k {
-        let i = (2 * q + 1) * m / (2 * k);
-        let t = time_us(tu, reps, || {
-            l.copy_from_slice(&l0);
-            env.delete(&mut l, i, &mut sigma);
-            black_box(&mut l);
-        });
-        deletions.push((i, (t - copy_us).max(0.0)));
-    }
+    let mut b = EnvelopeBench::new(a, plan.kernel_target_us, plan.kernel_repeats);
+    let factor_us = b.time_factor();
+    let copy_us = b.time_copy();
+    let deletions = b.time_single_deletions(copy_us);
     let dels: Vec<f64> = deletions.iter().map(|d| d.1).collect();
     let deletion_us_mean = dels.iter().sum::<f64>() / dels.len().max(1) as f64;
     let deletion_us_min = dels.iter().copied().fold(f64::INFINITY, f64::min);
     let deletion_us_max = dels.iter().copied().fold(0.0, f64::max);
-
-    // Deletion cost depends on the position (the sweep runs to the end of the connected block), so
-    // every tight count is averaged over several random nested tight sets.
-    let mut rng = ChaCha8Rng::seed_from_u64(seed);
-    let orders: Vec<Vec<usize>> = (0..plan.kernel_sets.max(1))
-        .map(|_| {
-            let mut o: Vec<usize> = (0..m).collect();
-            o.shuffle(&mut rng);
-            o
-        })
-        .collect();
-    let mut sweep = Vec::new();
-    for t in 1..=plan.kernel_t_max.min(m.saturating_sub(1)) {
-        let (mut downdate_us, mut refactor_us) = (0.0, 0.0);
-        for order in &orders {
-            let mut set = order[..t].to_vec();
-            set.sort_unstable();
-            mask.fill(false);
-            for &i in &set {
-                mask[i] = true;
-            }
-            downdate_us += time_us(tu, reps, || {
-                l.copy_from_slice(&l0);
-                for &i in &set {
-                    env.delete(&mut l, i, &mut sigma);
-                }
-                black_box(&mut l);
-            });
-            refactor_us += time_us(tu, reps, || {
-                env.factor_from(&ap, &mask, &mut l, 0, maxd);
-                black_box(&mut l);
-            });
-        }
-        downdate_us /= orders.len() as f64;
-        refactor_us /= orders.len() as f64;
-        sweep.push(SweepPoint {
-            tight: t,
-            tight_pct: 100.0 * t as f64 / m as f64,
-            downdate_us,
-            refactor_us,
-            speedup: refactor_us / downdate_us,
-        });
-    }
+    let sweep = b.sweep(plan.kernel_sets, plan.kernel_t_max, seed);
     let crossover_tight = crossover(&sweep, |p| p.tight as f64);
     EnvelopeKernel {
         matrix: name.to_string(),
         m,
         bandwidth_input: ordering::bandwidth(a),
-        bandwidth_rcm: ordering::bandwidth(&ap),
-        envelope_entries: env.len(),
+        bandwidth_rcm: ordering::bandwidth(&b.ap),
+        envelope_entries: b.env.len(),
         factor_us,
         copy_us,
         deletion_us_mean,
@@ -199,6 +127,123 @@ pub fn envelope_kernel(name: &str, a: &SymCsr, plan: &Plan, seed: u64) -> Envelo
         sweep,
         crossover_tight,
         crossover_model: (factor_us - copy_us) / deletion_us_mean.max(1e-9),
+    }
+}
+
+/// One matrix in RCM order with its envelope, its factor `L₀` and the scratch the timed envelope
+/// kernels work in.
+struct EnvelopeBench {
+    m: usize,
+    ap: SymCsr,
+    env: Envelope,
+    maxd: f64,
+    mask: Vec<bool>,
+    l0: Vec<f64>,
+    l: Vec<f64>,
+    sigma: Vec<f64>,
+    /// Target µs of a timing sample and the repeats of a timing.
+    tu: f64,
+    reps: usize,
+}
+
+impl EnvelopeBench {
+    /// Orders `a` by RCM, builds its envelope and factors it once (nothing tight).
+    fn new(a: &SymCsr, tu: f64, reps: usize) -> Self {
+        let m = a.n();
+        let mut ws = OrderingWorkspace::new();
+        let (mut perm, mut inv) = (Vec::new(), Vec::new());
+        ws.order(a, OrderingKind::ReverseCuthillMcKee, &mut perm, &mut inv);
+        let mut ap = SymCsr::default();
+        ap.permuted_from(a, &perm, &inv);
+        let mut env = Envelope::new();
+        env.build(&ap);
+        let maxd = ap.max_diag();
+        let mask = vec![false; m];
+        let mut l0 = vec![0.0; env.len()];
+        env.factor_from(&ap, &mask, &mut l0, 0, maxd);
+        let l = l0.clone();
+        let sigma = vec![0.0; m];
+        EnvelopeBench { m, ap, env, maxd, mask, l0, l, sigma, tu, reps }
+    }
+
+    /// µs of one envelope factorization with the current mask.
+    fn time_factor(&mut self) -> f64 {
+        time_us(self.tu, self.reps, || {
+            self.env.factor_from(&self.ap, &self.mask, &mut self.l, 0, self.maxd);
+            black_box(&mut self.l);
+        })
+    }
+
+    /// µs of one copy of `L₀`.
+    fn time_copy(&mut self) -> f64 {
+        time_us(self.tu, self.reps, || {
+            self.l.copy_from_slice(&self.l0);
+            black_box(&mut self.l);
+        })
+    }
+
+    /// (index, µs) of single deletions from `L₀` at up to 8 indices spread over the matrix, the copy
+    /// subtracted.
+    fn time_single_deletions(&mut self, copy_us: f64) -> Vec<(usize, f64)> {
+        let m = self.m;
+        let k = 8.min(m);
+        let mut deletions = Vec::with_capacity(k);
+        for q in 0..k {
+            let i = (2 * q + 1) * m / (2 * k);
+            let t = time_us(self.tu, self.reps, || {
+                self.l.copy_from_slice(&self.l0);
+                self.env.delete(&mut self.l, i, &mut self.sigma);
+                black_box(&mut self.l);
+            });
+            deletions.push((i, (t - copy_us).max(0.0)));
+        }
+        deletions
+    }
+
+    /// Copy + deletions against a masked refactor for every tight count up to `t_max`, each averaged
+    /// over `sets` random nested tight sets drawn from `seed`.
+    fn sweep(&mut self, sets: usize, t_max: usize, seed: u64) -> Vec<SweepPoint> {
+        let m = self.m;
+        // Deletion cost depends on the position (the sweep runs to the end of the connected block),
+        // so every tight count is averaged over several random nested tight sets.
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        let orders: Vec<Vec<usize>> = (0..sets.max(1))
+            .map(|_| {
+                let mut o: Vec<usize> = (0..m).collect();
+                o.shuffle(&mut rng);
+                o
+            })
+            .collect();
+        let mut sweep = Vec::new();
+        for t in 1..=t_max.min(m.saturating_sub(1)) {
+            let (mut downdate_us, mut refactor_us) = (0.0, 0.0);
+            for order in &orders {
+                let mut set = order[..t].to_vec();
+                set.sort_unstable();
+                self.mask.fill(false);
+                for &i in &set {
+                    self.mask[i] = true;
+                }
+                downdate_us += time_us(self.tu, self.reps, || {
+                    self.l.copy_from_slice(&self.l0);
+                    for &i in &set {
+                        self.env.delete(&mut self.l, i, &mut self.sigma);
+                    }
+                    black_box(&mut self.l);
+                });
+                refactor_us += self.time_factor();
+            }
+            downdate_us /= orders.len() as f64;
+            refactor_us /= orders.len() as f64;
+            sweep.push(SweepPoint {
+                tight: t,
+                tight_pct: 100.0 * t as f64 / m as f64,
+                downdate_us,
+                refactor_us,
+                speedup: refactor_us / downdate_us,
+            });
+        }
+        sweep
     }
 }
 

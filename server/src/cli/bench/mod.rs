@@ -52,7 +52,9 @@ use pivotsim_server::solver::{Mlcp, Variant, io};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 
-use kernels::{Fig4, dense_kernel, dense_sweep, envelope_kernel, random_spd, warm_up};
+use kernels::{
+    DenseKernel, EnvelopeKernel, Fig4, dense_kernel, dense_sweep, envelope_kernel, random_spd, warm_up,
+};
 use plan::{LONG_STEPS, Plan, SHORT_STEPS};
 use plots::{plot_fig4, plot_solve_times};
 use problems::{ProblemResult, run_problem};
@@ -105,6 +107,12 @@ fn txt_files(dir: &Path) -> Vec<PathBuf> {
     v
 }
 
+/// A data file read as a problem: name, group, path and the MLCP.
+type FileProblem = (String, &'static str, PathBuf, Mlcp);
+
+/// A generated problem: name, seed, mass ratio and the MLCP.
+type GeneratedProblem = (String, u64, f64, Mlcp);
+
 /// Runs the benchmark of `cfg`, writes the report files and prints the markdown and the summary.
 pub fn run(cfg: &BenchConfig) -> anyhow::Result<Summary> {
     let t_start = Instant::now();
@@ -115,46 +123,13 @@ pub fn run(cfg: &BenchConfig) -> anyhow::Result<Summary> {
     }
 
     // Inputs first, so that the progress bar knows its length.
-    let dirs: Vec<(PathBuf, &'static str)> = match &cfg.data {
-        Some(d) => vec![(d.clone(), "data")],
-        None => default_data_dirs(),
-    };
-    let mut files: Vec<(String, &'static str, PathBuf, Mlcp)> = Vec::new();
-    let mut unreadable: Vec<(String, String)> = Vec::new();
-    for (dir, group) in &dirs {
-        let list = txt_files(dir);
-        if list.is_empty() {
-            eprintln!("note: no *.txt problems in {}", dir.display());
-        }
-        for f in list {
-            match io::read_mlcp_file(&f) {
-                Ok(p) => {
-                    let name = f.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
-                    files.push((name, group, f, p));
-                }
-                Err(e) => unreadable.push((f.display().to_string(), e.to_string())),
-            }
-        }
-    }
-    let generated: Vec<(String, u64, f64, Mlcp)> = plan
-        .generated
-        .iter()
-        .map(|&(m, seed, mr)| {
-            let p = contact_like(m, seed, mr);
-            (format!("contact-like-{}-s{seed}", p.n()), seed, mr, p)
-        })
-        .collect();
+    let (files, unreadable) = read_data_files(cfg);
+    let generated = generate_problems(&plan);
     let crane = files.iter().find(|f| f.0.contains("crane430"));
     let n_env_kernels = 1 + usize::from(crane.is_some());
     let total =
         (n_env_kernels + 2 + plan.fig4_m.len() + (generated.len() + files.len()) * Variant::ALL.len()) as u64;
-    let target = if cfg.tiny { ProgressDrawTarget::hidden() } else { ProgressDrawTarget::stderr() };
-    let pb = ProgressBar::with_draw_target(Some(total), target);
-    pb.set_style(
-        ProgressStyle::with_template("{elapsed_precise} [{bar:30}] {pos}/{len} {msg}")
-            .expect("valid template")
-            .progress_chars("=> "),
-    );
+    let pb = progress_bar(cfg.tiny, total);
     let say = |s: String| {
         if !cfg.tiny {
             pb.suspend(|| eprintln!("{s}"));
@@ -169,45 +144,10 @@ pub fn run(cfg: &BenchConfig) -> anyhow::Result<Summary> {
         cfg.out.display()
     ));
 
-    // 1. Kernels, after a short warm-up that brings the core to its steady clock.
     say("[1/4] kernel crossover".into());
-    let kernel_problem = contact_like(plan.kernel_m, 430, 6_300.0);
-    warm_up(plan.warm_up_us);
-    let mut env_kernels = Vec::new();
-    let kname = format!("contact-like-{} (generated)", kernel_problem.n());
-    pb.set_message(format!("envelope kernels on {kname}"));
-    env_kernels.push(envelope_kernel(&kname, kernel_problem.a(), &plan, 11));
-    pb.inc(1);
-    if let Some((name, _, _, p)) = crane {
-        pb.set_message(format!("envelope kernels on {name}"));
-        env_kernels.push(envelope_kernel(name, p.a(), &plan, 11));
-        pb.inc(1);
-    }
-    let mut dense_kernels = Vec::new();
-    let km = kernel_problem.n();
-    let mut kd = vec![0.0; km * km];
-    kernel_problem.a().to_dense(&mut kd);
-    pb.set_message("dense kernels (contact-like)");
-    dense_kernels.push(dense_kernel(&format!("contact-like-{km} (input order)"), &kd, km, &plan, 12));
-    pb.inc(1);
-    let mut rng = ChaCha8Rng::seed_from_u64(4);
-    let rd = random_spd(km, &mut rng);
-    pb.set_message("dense kernels (random SPD)");
-    dense_kernels.push(dense_kernel(&format!("random SPD {km}"), &rd, km, &plan, 13));
-    pb.inc(1);
-
-    // 2. Fig. 4.
+    let (env_kernels, dense_kernels) = run_kernels(&plan, crane, &pb);
     say("[2/4] paper Fig. 4 grid".into());
-    let mut fig4 =
-        Fig4 { sizes: plan.fig4_m.clone(), tight_pct: plan.fig4_fracs.clone(), sweeps: Vec::new() };
-    for &m in &plan.fig4_m {
-        pb.set_message(format!("Fig. 4, m = {m}"));
-        let mut rng = ChaCha8Rng::seed_from_u64(1000 + m as u64);
-        let a = random_spd(m, &mut rng);
-        let reps = if m >= 700 { plan.fig4_repeats.min(3) } else { plan.fig4_repeats };
-        fig4.sweeps.push(dense_sweep(&a, m, &plan.fig4_fracs, plan.fig4_target_us, reps, &mut rng));
-        pb.inc(1);
-    }
+    let fig4 = run_fig4(&plan, &pb);
 
     // 3. Generated problems, 4. files.
     say("[3/4] generated contact-like problems".into());
@@ -245,33 +185,151 @@ pub fn run(cfg: &BenchConfig) -> anyhow::Result<Summary> {
         problems: &problems,
         unreadable_files: &unreadable,
     };
-    let md = markdown(&report) + &corpus::markdown(&corpus);
+    let md = write_report(cfg, &plan, &report, &corpus)?;
+    println!("{md}");
+    println!("{}", summary_text(&summary));
+    println!("report: {}", cfg.out.join("bench.md").display());
+    Ok(summary)
+}
+
+/// Reads every `*.txt` problem of the data directories; the files that fail to parse are listed
+/// with their error.
+fn read_data_files(cfg: &BenchConfig) -> (Vec<FileProblem>, Vec<(String, String)>) {
+    let dirs: Vec<(PathBuf, &'static str)> = match &cfg.data {
+        Some(d) => vec![(d.clone(), "data")],
+        None => default_data_dirs(),
+    };
+    let mut files: Vec<FileProblem> = Vec::new();
+    let mut unreadable: Vec<(String, String)> = Vec::new();
+    for (dir, group) in &dirs {
+        let list = txt_files(dir);
+        if list.is_empty() {
+            eprintln!("note: no *.txt problems in {}", dir.display());
+        }
+        for f in list {
+            match io::read_mlcp_file(&f) {
+                Ok(p) => {
+                    let name = f.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
+                    files.push((name, group, f, p));
+                }
+                Err(e) => unreadable.push((f.display().to_string(), e.to_string())),
+            }
+        }
+    }
+    (files, unreadable)
+}
+
+/// The plan's generated contact-like problems, named by size and seed.
+fn generate_problems(plan: &Plan) -> Vec<GeneratedProblem> {
+    plan.generated
+        .iter()
+        .map(|&(m, seed, mr)| {
+            let p = contact_like(m, seed, mr);
+            (format!("contact-like-{}-s{seed}", p.n()), seed, mr, p)
+        })
+        .collect()
+}
+
+/// A progress bar of `total` ticks on stderr (hidden in a tiny run).
+fn progress_bar(tiny: bool, total: u64) -> ProgressBar {
+    let target = if tiny { ProgressDrawTarget::hidden() } else { ProgressDrawTarget::stderr() };
+    let pb = ProgressBar::with_draw_target(Some(total), target);
+    pb.set_style(
+        ProgressStyle::with_template("{elapsed_precise} [{bar:30}] {pos}/{len} {msg}")
+            .expect("valid template")
+            .progress_chars("=> "),
+    );
+    pb
+}
+
+/// Stage 1: envelope kernels on the generated matrix (and on `scene-crane430` when loaded), then
+/// dense kernels on it and on a random SPD matrix, after a short warm-up that brings the core to its
+/// steady clock.
+fn run_kernels(
+    plan: &Plan,
+    crane: Option<&FileProblem>,
+    pb: &ProgressBar,
+) -> (Vec<EnvelopeKernel>, Vec<DenseKernel>) {
+    let kernel_problem = contact_like(plan.kernel_m, 430, 6_300.0);
+    warm_up(plan.warm_up_us);
+    let mut env_kernels = Vec::new();
+    let kname = format!("contact-like-{} (generated)", kernel_problem.n());
+    pb.set_message(format!("envelope kernels on {kname}"));
+    env_kernels.push(envelope_kernel(&kname, kernel_problem.a(), plan, 11));
+    pb.inc(1);
+    if let Some((name, _, _, p)) = crane {
+        pb.set_message(format!("envelope kernels on {name}"));
+        env_kernels.push(envelope_kernel(name, p.a(), plan, 11));
+        pb.inc(1);
+    }
+    let mut dense_kernels = Vec::new();
+    let km = kernel_problem.n();
+    let mut kd = vec![0.0; km * km];
+    kernel_problem.a().to_dense(&mut kd);
+    pb.set_message("dense kernels (contact-like)");
+    dense_kernels.push(dense_kernel(&format!("contact-like-{km} (input order)"), &kd, km, plan, 12));
+    pb.inc(1);
+    let mut rng = ChaCha8Rng::seed_from_u64(4);
+    let rd = random_spd(km, &mut rng);
+    pb.set_message("dense kernels (random SPD)");
+    dense_kernels.push(dense_kernel(&format!("random SPD {km}"), &rd, km, plan, 13));
+    pb.inc(1);
+    (env_kernels, dense_kernels)
+}
+
+/// Stage 2: the paper's Fig. 4 grid, one dense sweep a size.
+fn run_fig4(plan: &Plan, pb: &ProgressBar) -> Fig4 {
+    let mut fig4 =
+        Fig4 { sizes: plan.fig4_m.clone(), tight_pct: plan.fig4_fracs.clone(), sweeps: Vec::new() };
+    for &m in &plan.fig4_m {
+        pb.set_message(format!("Fig. 4, m = {m}"));
+        let mut rng = ChaCha8Rng::seed_from_u64(1000 + m as u64);
+        let a = random_spd(m, &mut rng);
+        let reps = if m >= 700 { plan.fig4_repeats.min(3) } else { plan.fig4_repeats };
+        fig4.sweeps.push(dense_sweep(&a, m, &plan.fig4_fracs, plan.fig4_target_us, reps, &mut rng));
+        pb.inc(1);
+    }
+    fig4
+}
+
+/// Writes `bench.md`, `bench.json`, `corpus.json` and the two plots to the output directory;
+/// returns the markdown.
+fn write_report(
+    cfg: &BenchConfig,
+    plan: &Plan,
+    report: &Report<'_>,
+    corpus: &corpus::CorpusReport,
+) -> anyhow::Result<String> {
+    let md = markdown(report) + &corpus::markdown(corpus);
     let out = &cfg.out;
     std::fs::write(out.join("bench.md"), &md).with_context(|| format!("cannot write {}", out.display()))?;
-    let json = serde_json::to_string_pretty(&report)?;
+    let json = serde_json::to_string_pretty(report)?;
     std::fs::write(out.join("bench.json"), json)
         .with_context(|| format!("cannot write {}", out.display()))?;
-    std::fs::write(out.join("corpus.json"), serde_json::to_string_pretty(&corpus)?)
+    std::fs::write(out.join("corpus.json"), serde_json::to_string_pretty(corpus)?)
         .with_context(|| format!("cannot write {}", out.display()))?;
-    plot_fig4(&out.join("fig4_speedup.svg"), &fig4)?;
+    plot_fig4(&out.join("fig4_speedup.svg"), report.fig4)?;
+    let charted = chart_problems(plan, report.problems, cfg.data.is_some());
+    plot_solve_times(&out.join("solve_time.svg"), &charted)?;
+    Ok(md)
+}
+
+/// The problems of the solve-time chart: the focus-size generated ones and the scene-shaped ones,
+/// up to ten larger ones of `--data`, or else the first six.
+fn chart_problems<'p>(plan: &Plan, problems: &'p [ProblemResult], data: bool) -> Vec<&'p ProblemResult> {
     let lo = plan.focus_m as f64 * 0.9;
     let hi = plan.focus_m as f64 * 1.1;
     let mut chart_problems: Vec<&ProblemResult> = problems
         .iter()
         .filter(|p| p.group == "generated" && (p.m as f64) >= lo && (p.m as f64) <= hi || p.group == "scene")
         .collect();
-    if cfg.data.is_some() {
+    if data {
         chart_problems.extend(problems.iter().filter(|p| p.group == "data" && p.m >= 150).take(10));
     }
     if chart_problems.is_empty() {
         chart_problems = problems.iter().take(6).collect();
     }
-    plot_solve_times(&out.join("solve_time.svg"), &chart_problems)?;
-
-    println!("{md}");
-    println!("{}", summary_text(&summary));
-    println!("report: {}", out.join("bench.md").display());
-    Ok(summary)
+    chart_problems
 }
 
 #[cfg(test)]

@@ -155,57 +155,10 @@ pub fn run_problem(
     let mut variants = Vec::with_capacity(Variant::ALL.len());
     for v in Variant::ALL {
         pb.set_message(format!("{name} [{v}]"));
-        let short =
-            timed_solve(p, options(v, SHORT_STEPS), plan.solve_budget_us, plan.solve_max_repeats, false);
-        let (long, long_skipped) = if short.converged() {
-            let mut l = short.clone();
-            l.max_steps = LONG_STEPS;
-            l.from_short = true;
-            (Some(l), None)
-        } else {
-            let est = short.time_us * LONG_STEPS as f64 / short.steps().max(1) as f64;
-            if est > plan.long_budget_us {
-                (None, Some(format!("predicted {:.1} s", est * 1e-6)))
-            } else {
-                (Some(timed_solve(p, options(v, LONG_STEPS), 0.0, 1, true)), None)
-            }
-        };
-        variants.push(VariantResult {
-            variant: v,
-            short,
-            long,
-            long_skipped,
-            deletion_error: None,
-            deletion_error_abs: None,
-            deletion_backward_error: None,
-            deletion_error_skipped: None,
-            deletion_run_regularized: 0,
-        });
+        variants.push(run_variant(p, v, plan));
         pb.inc(1);
     }
-    // Deletion error (paper Table 4) for the variants that delete, outside the timings. The
-    // measurement refactors at every deletion step: predict its cost from the refactoring variants.
-    let time_of = |v: Variant, vs: &[VariantResult]| {
-        vs.iter().find(|r| r.variant == v).map(|r| r.short.time_us).unwrap_or(0.0)
-    };
-    for v in [Variant::Downdate, Variant::Skyline, Variant::Auto] {
-        let refactor = if v == Variant::Downdate { Variant::Full } else { Variant::SkylineRefactor };
-        let est = time_of(v, &variants) + 2.0 * time_of(refactor, &variants);
-        let Some(k) = variants.iter().position(|r| r.variant == v) else { continue };
-        if est > plan.long_budget_us {
-            variants[k].deletion_error_skipped = Some(format!("predicted {:.1} s", est * 1e-6));
-            continue;
-        }
-        let mut opts = options(v, SHORT_STEPS);
-        opts.measure_deletion_error = true;
-        let mut solver = Solver::new(opts);
-        let mut lambda = vec![0.0; m];
-        let st = solver.solve(p, &mut lambda);
-        variants[k].deletion_error = st.deletion_error;
-        variants[k].deletion_error_abs = st.deletion_error_abs;
-        variants[k].deletion_backward_error = st.deletion_backward_error;
-        variants[k].deletion_run_regularized = st.regularized;
-    }
+    measure_deletion_errors(p, plan, &mut variants);
     ProblemResult {
         name,
         group: group.to_string(),
@@ -222,5 +175,62 @@ pub fn run_problem(
         envelope_before: ordering::envelope(a),
         envelope_after: ordering::envelope_permuted(a, &inv),
         variants,
+    }
+}
+
+/// Variant `v` on `p` with the paper's step cap, then with 1000 steps (copied when already
+/// converged, skipped when predicted over the budget); deletion errors not yet measured.
+fn run_variant(p: &Mlcp, v: Variant, plan: &Plan) -> VariantResult {
+    let short = timed_solve(p, options(v, SHORT_STEPS), plan.solve_budget_us, plan.solve_max_repeats, false);
+    let (long, long_skipped) = if short.converged() {
+        let mut l = short.clone();
+        l.max_steps = LONG_STEPS;
+        l.from_short = true;
+        (Some(l), None)
+    } else {
+        let est = short.time_us * LONG_STEPS as f64 / short.steps().max(1) as f64;
+        if est > plan.long_budget_us {
+            (None, Some(format!("predicted {:.1} s", est * 1e-6)))
+        } else {
+            (Some(timed_solve(p, options(v, LONG_STEPS), 0.0, 1, true)), None)
+        }
+    };
+    VariantResult {
+        variant: v,
+        short,
+        long,
+        long_skipped,
+        deletion_error: None,
+        deletion_error_abs: None,
+        deletion_backward_error: None,
+        deletion_error_skipped: None,
+        deletion_run_regularized: 0,
+    }
+}
+
+/// Deletion error (paper Table 4) for the variants that delete, outside the timings. The
+/// measurement refactors at every deletion step: its cost is predicted from the refactoring
+/// variants, and skipped over the budget.
+fn measure_deletion_errors(p: &Mlcp, plan: &Plan, variants: &mut [VariantResult]) {
+    let time_of = |v: Variant, vs: &[VariantResult]| {
+        vs.iter().find(|r| r.variant == v).map(|r| r.short.time_us).unwrap_or(0.0)
+    };
+    for v in [Variant::Downdate, Variant::Skyline, Variant::Auto] {
+        let refactor = if v == Variant::Downdate { Variant::Full } else { Variant::SkylineRefactor };
+        let est = time_of(v, variants) + 2.0 * time_of(refactor, variants);
+        let Some(k) = variants.iter().position(|r| r.variant == v) else { continue };
+        if est > plan.long_budget_us {
+            variants[k].deletion_error_skipped = Some(format!("predicted {:.1} s", est * 1e-6));
+            continue;
+        }
+        let mut opts = options(v, SHORT_STEPS);
+        opts.measure_deletion_error = true;
+        let mut solver = Solver::new(opts);
+        let mut lambda = vec![0.0; p.n()];
+        let st = solver.solve(p, &mut lambda);
+        variants[k].deletion_error = st.deletion_error;
+        variants[k].deletion_error_abs = st.deletion_error_abs;
+        variants[k].deletion_backward_error = st.deletion_backward_error;
+        variants[k].deletion_run_regularized = st.regularized;
     }
 }

@@ -229,7 +229,20 @@ pub fn build_kind() -> &'static str {
 
 pub fn markdown(r: &Report<'_>) -> String {
     let mut md = String::new();
-    let w = &mut md;
+    write_header(&mut md, r);
+    write_envelope_kernels(&mut md, r.kernel_envelope);
+    write_dense_kernels(&mut md, r.kernel_dense);
+    write_fig4(&mut md, r.fig4);
+    write_variant_convergence(&mut md, r.problems);
+    for p in r.problems {
+        write_problem(&mut md, p);
+    }
+    write_unreadable_files(&mut md, r.unreadable_files);
+    md
+}
+
+/// Title, machine line and the headline summary.
+fn write_header(w: &mut String, r: &Report<'_>) {
     let _ = writeln!(w, "# pivotsim solver benchmark ({} mode)\n", r.mode);
     let _ = writeln!(
         w,
@@ -237,7 +250,10 @@ pub fn markdown(r: &Report<'_>) -> String {
         r.cpu, r.build, r.short_steps, r.long_steps
     );
     let _ = writeln!(w, "## Summary\n\n```text\n{}```\n", summary_text(r.summary));
+}
 
+/// Section 1, envelope half: the kernel table and each matrix's sweep.
+fn write_envelope_kernels(w: &mut String, kernel_envelope: &[EnvelopeKernel]) {
     let _ = writeln!(w, "## 1. Kernel crossover\n");
     let _ = writeln!(
         w,
@@ -252,7 +268,7 @@ pub fn markdown(r: &Report<'_>) -> String {
         "| matrix | m | bandwidth in → RCM | envelope entries | factor µs | copy µs | deletion µs (min–max) | crossover (sweep) | crossover (model) |"
     );
     let _ = writeln!(w, "|---|---|---|---|---|---|---|---|---|");
-    for e in r.kernel_envelope {
+    for e in kernel_envelope {
         let _ = writeln!(
             w,
             "| {} | {} | {} → {} | {} | {:.2} | {:.2} | {:.2} ({:.2}–{:.2}) | {} tight | {:.1} tight |",
@@ -270,7 +286,7 @@ pub fn markdown(r: &Report<'_>) -> String {
             e.crossover_model
         );
     }
-    for e in r.kernel_envelope {
+    for e in kernel_envelope {
         let _ = writeln!(w, "\nSweep on {} (µs):\n", e.matrix);
         let _ = writeln!(w, "| tight | copy + deletions | masked refactor | speed-up |");
         let _ = writeln!(w, "|---|---|---|---|");
@@ -282,6 +298,10 @@ pub fn markdown(r: &Report<'_>) -> String {
             );
         }
     }
+}
+
+/// Section 1, dense half: the kernel table and each matrix's sweep.
+fn write_dense_kernels(w: &mut String, kernel_dense: &[DenseKernel]) {
     let _ = writeln!(
         w,
         "\nDense (input order): gather + dense Cholesky of the whole matrix, copy of `L₀`, single deletions; \
@@ -289,7 +309,7 @@ pub fn markdown(r: &Report<'_>) -> String {
     );
     let _ = writeln!(w, "| matrix | m | factor µs | copy µs | deletion µs (mean) | crossover |");
     let _ = writeln!(w, "|---|---|---|---|---|---|");
-    for d in r.kernel_dense {
+    for d in kernel_dense {
         let _ = writeln!(
             w,
             "| {} | {} | {:.1} | {:.1} | {:.2} | {} |",
@@ -301,7 +321,7 @@ pub fn markdown(r: &Report<'_>) -> String {
             fmt_crossover(&d.crossover_pct, " %", 1)
         );
     }
-    for d in r.kernel_dense {
+    for d in kernel_dense {
         let _ = writeln!(w, "\nDense sweep on {} (µs):\n", d.matrix);
         let _ = writeln!(w, "| tight % | tight | copy + deletions | gather + Cholesky | speed-up |");
         let _ = writeln!(w, "|---|---|---|---|---|");
@@ -313,7 +333,10 @@ pub fn markdown(r: &Report<'_>) -> String {
             );
         }
     }
+}
 
+/// Section 2: the paper's Fig. 4 speed-up table, one row a size.
+fn write_fig4(w: &mut String, fig4: &Fig4) {
     let _ =
         writeln!(w, "\n## 2. Paper Fig. 4: speed-up of copy + deletions over a dense refactor of `A_FF`\n");
     let _ = writeln!(
@@ -321,19 +344,22 @@ pub fn markdown(r: &Report<'_>) -> String {
         "Random dense SPD `(B Bᵀ + m I)/m`; entries are `refactor / (copy + deletions)`; > 1 means the deletions win. Plot: `fig4_speedup.svg`.\n"
     );
     let _ = write!(w, "| m |");
-    for f in &r.fig4.tight_pct {
+    for f in &fig4.tight_pct {
         let _ = write!(w, " {f}% |");
     }
     let _ = writeln!(w);
-    let _ = writeln!(w, "|---|{}", "---|".repeat(r.fig4.tight_pct.len()));
-    for (m, sw) in r.fig4.sizes.iter().zip(&r.fig4.sweeps) {
+    let _ = writeln!(w, "|---|{}", "---|".repeat(fig4.tight_pct.len()));
+    for (m, sw) in fig4.sizes.iter().zip(&fig4.sweeps) {
         let _ = write!(w, "| {m} |");
         for p in sw {
             let _ = write!(w, " {:.2} |", p.speedup);
         }
         let _ = writeln!(w);
     }
+}
 
+/// Sections 3–4 opening: how the columns are measured and convergence per variant.
+fn write_variant_convergence(w: &mut String, problems: &[ProblemResult]) {
     let _ = writeln!(w, "\n## 3–4. Solver variants per problem\n");
     let _ = writeln!(
         w,
@@ -343,86 +369,96 @@ pub fn markdown(r: &Report<'_>) -> String {
          over the pivot steps, relative / absolute (paper Table 4), for the variants that delete. \
          `auto` choices: deletions from L₀ / from the previous factor / incremental refactor.\n"
     );
-    let _ = writeln!(w, "Convergence per variant over all {} problems:\n", r.problems.len());
+    let _ = writeln!(w, "Convergence per variant over all {} problems:\n", problems.len());
     let _ = writeln!(w, "| variant | converged@35 | converged@1000 | 1000-step runs skipped |");
     let _ = writeln!(w, "|---|---|---|---|");
     for v in Variant::ALL {
-        let rs: Vec<&VariantResult> = r.problems.iter().filter_map(|p| p.variant(v)).collect();
+        let rs: Vec<&VariantResult> = problems.iter().filter_map(|p| p.variant(v)).collect();
         let c35 = rs.iter().filter(|x| x.short.converged()).count();
         let c1000 = rs.iter().filter(|x| x.long.as_ref().is_some_and(RunRecord::converged)).count();
         let sk = rs.iter().filter(|x| x.long_skipped.is_some()).count();
         let _ = writeln!(w, "| {v} | {c35}/{} | {c1000}/{} | {sk} |", rs.len(), rs.len());
     }
-    for p in r.problems {
-        let _ = writeln!(w, "\n### {} ({})\n", p.name, p.group);
-        let origin = match (p.seed, p.mass_ratio) {
-            (Some(s), Some(mr)) => format!(", seed {s}, mass ratio {mr}"),
-            _ => String::new(),
-        };
-        let _ = writeln!(
-            w,
-            "m = {}, nnz = {}, rows: {} unbounded, {} friction, {} other; bandwidth {} → {} and envelope {} → {} (RCM){}\n",
-            p.m,
-            p.nnz,
-            p.rows_unbounded,
-            p.rows_friction,
-            p.rows_other,
-            p.bandwidth_before,
-            p.bandwidth_after,
-            p.envelope_before,
-            p.envelope_after,
-            origin
-        );
-        let _ = writeln!(
-            w,
-            "| variant | status@35 | steps | tight | time ms @35 | µs/step | residual_rel | converged@1000 | deletion error rel / abs / backward | auto choices |"
-        );
-        let _ = writeln!(w, "|---|---|---|---|---|---|---|---|---|---|");
-        for r in &p.variants {
-            let s = &r.short;
-            let long = match (&r.long, &r.long_skipped) {
-                (Some(l), _) if l.converged() => format!("yes ({})", l.steps()),
-                (Some(l), _) => format!("no ({}, r={:.1e})", l.stats.status.name(), l.stats.residual_rel),
-                (None, Some(why)) => format!("skipped ({why})"),
-                (None, None) => "—".into(),
-            };
-            let del = match (r.deletion_error, r.deletion_error_abs, &r.deletion_error_skipped) {
-                (Some(a), Some(b), _) if r.deletion_run_regularized > 0 => {
-                    format!("{a:.1e} / {b:.1e} ({} regularized)", r.deletion_run_regularized)
-                }
-                (Some(a), Some(b), _) => match r.deletion_backward_error {
-                    Some(c) => format!("{a:.1e} / {b:.1e} / {c:.1e}"),
-                    None => format!("{a:.1e} / {b:.1e}"),
-                },
-                (_, _, Some(why)) => format!("skipped ({why})"),
-                _ => "—".into(),
-            };
-            let choices = if r.variant == Variant::Auto {
-                format!("{}/{}/{}", s.stats.auto_choices[0], s.stats.auto_choices[1], s.stats.auto_choices[2])
-            } else {
-                String::new()
-            };
-            let _ = writeln!(
-                w,
-                "| {} | {} | {} | {} | {:.3} | {} | {:.1e} | {} | {} | {} |",
-                r.variant,
-                s.stats.status.name(),
-                s.steps(),
-                s.stats.tight,
-                s.time_us * 1e-3,
-                opt(s.us_per_step, 1),
-                s.stats.residual_rel,
-                long,
-                del,
-                choices
-            );
-        }
+}
+
+/// One problem's subsection: its shape line and a row per variant.
+fn write_problem(w: &mut String, p: &ProblemResult) {
+    let _ = writeln!(w, "\n### {} ({})\n", p.name, p.group);
+    let origin = match (p.seed, p.mass_ratio) {
+        (Some(s), Some(mr)) => format!(", seed {s}, mass ratio {mr}"),
+        _ => String::new(),
+    };
+    let _ = writeln!(
+        w,
+        "m = {}, nnz = {}, rows: {} unbounded, {} friction, {} other; bandwidth {} → {} and envelope {} → {} (RCM){}\n",
+        p.m,
+        p.nnz,
+        p.rows_unbounded,
+        p.rows_friction,
+        p.rows_other,
+        p.bandwidth_before,
+        p.bandwidth_after,
+        p.envelope_before,
+        p.envelope_after,
+        origin
+    );
+    let _ = writeln!(
+        w,
+        "| variant | status@35 | steps | tight | time ms @35 | µs/step | residual_rel | converged@1000 | deletion error rel / abs / backward | auto choices |"
+    );
+    let _ = writeln!(w, "|---|---|---|---|---|---|---|---|---|---|");
+    for r in &p.variants {
+        write_variant_row(w, r);
     }
-    if !r.unreadable_files.is_empty() {
+}
+
+/// One variant's row of a problem table.
+fn write_variant_row(w: &mut String, r: &VariantResult) {
+    let s = &r.short;
+    let long = match (&r.long, &r.long_skipped) {
+        (Some(l), _) if l.converged() => format!("yes ({})", l.steps()),
+        (Some(l), _) => format!("no ({}, r={:.1e})", l.stats.status.name(), l.stats.residual_rel),
+        (None, Some(why)) => format!("skipped ({why})"),
+        (None, None) => "—".into(),
+    };
+    let del = match (r.deletion_error, r.deletion_error_abs, &r.deletion_error_skipped) {
+        (Some(a), Some(b), _) if r.deletion_run_regularized > 0 => {
+            format!("{a:.1e} / {b:.1e} ({} regularized)", r.deletion_run_regularized)
+        }
+        (Some(a), Some(b), _) => match r.deletion_backward_error {
+            Some(c) => format!("{a:.1e} / {b:.1e} / {c:.1e}"),
+            None => format!("{a:.1e} / {b:.1e}"),
+        },
+        (_, _, Some(why)) => format!("skipped ({why})"),
+        _ => "—".into(),
+    };
+    let choices = if r.variant == Variant::Auto {
+        format!("{}/{}/{}", s.stats.auto_choices[0], s.stats.auto_choices[1], s.stats.auto_choices[2])
+    } else {
+        String::new()
+    };
+    let _ = writeln!(
+        w,
+        "| {} | {} | {} | {} | {:.3} | {} | {:.1e} | {} | {} | {} |",
+        r.variant,
+        s.stats.status.name(),
+        s.steps(),
+        s.stats.tight,
+        s.time_us * 1e-3,
+        opt(s.us_per_step, 1),
+        s.stats.residual_rel,
+        long,
+        del,
+        choices
+    );
+}
+
+/// The closing list of input files that could not be read, when there are any.
+fn write_unreadable_files(w: &mut String, unreadable_files: &[(String, String)]) {
+    if !unreadable_files.is_empty() {
         let _ = writeln!(w, "\n### Files that could not be read\n");
-        for (f, e) in r.unreadable_files {
+        for (f, e) in unreadable_files {
             let _ = writeln!(w, "- `{f}`: {e}");
         }
     }
-    md
 }

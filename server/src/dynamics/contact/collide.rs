@@ -124,6 +124,22 @@ fn jointed(joints: &[Joint], connected: &HashSet<u32>, a: usize, b: usize) -> bo
     })
 }
 
+/// Whether colliders `ci` and `cj` may touch: different bodies, interacting groups, one body
+/// dynamic, and no joint between them that keeps them apart.
+fn may_touch(
+    ci: &Collider,
+    cj: &Collider,
+    bodies: &[RigidBody],
+    joints: &[Joint],
+    connected: &HashSet<u32>,
+) -> bool {
+    let (bi, bj) = (ci.body.index(), cj.body.index());
+    !(bi == bj
+        || !ci.groups.interacts_with(cj.groups)
+        || (bodies[bi].kind() != BodyKind::Dynamic && bodies[bj].kind() != BodyKind::Dynamic)
+        || jointed(joints, connected, bi, bj))
+}
+
 impl NarrowPhase {
     /// Finds the contact points of all collider pairs at the current poses within `margin`.
     pub fn update(
@@ -137,6 +153,21 @@ impl NarrowPhase {
     ) {
         self.stamp += 1;
         self.points.clear();
+        self.place_parts(colliders, bodies, margin);
+        self.broad.update(&self.bounds);
+        for p in 0..self.broad.pairs().len() {
+            let (i, j) = self.broad.pairs()[p];
+            let (i, j) = (i as usize, j as usize);
+            if may_touch(&colliders[i], &colliders[j], bodies, joints, connected) {
+                self.collider_pair_points(colliders, i, j, mu_of(i, j), margin);
+            }
+        }
+        let stamp = self.stamp;
+        self.pairs.retain(|_, c| c.stamp == stamp);
+    }
+
+    /// The world pose of every collider part and each collider's AABB grown by half the margin.
+    fn place_parts(&mut self, colliders: &[Collider], bodies: &[RigidBody], margin: f64) {
         self.poses.clear();
         self.first.clear();
         self.bounds.clear();
@@ -155,97 +186,142 @@ impl NarrowPhase {
             let bounded = !c.shape.is_unbounded();
             self.bounds.push(bounded.then(|| (from_vec(lo - grow), from_vec(hi + grow))));
         }
-        let dispatcher = DefaultQueryDispatcher;
-        self.broad.update(&self.bounds);
-        for &(i, j) in self.broad.pairs() {
-            let (i, j) = (i as usize, j as usize);
-            let (ci, cj) = (&colliders[i], &colliders[j]);
-            let (bi, bj) = (ci.body.index(), cj.body.index());
-            if bi == bj
-                || !ci.groups.interacts_with(cj.groups)
-                || (bodies[bi].kind() != BodyKind::Dynamic && bodies[bj].kind() != BodyKind::Dynamic)
-                || jointed(joints, connected, bi, bj)
-            {
-                continue;
-            }
-            let mu = mu_of(i, j);
-            for (k, part_i) in ci.parts.iter().enumerate() {
-                for (l, part_j) in cj.parts.iter().enumerate() {
-                    let (pi, pj) = (self.poses[self.first[i] + k], self.poses[self.first[j] + l]);
-                    // A compound's part index tags the feature ids (0 for other shapes).
-                    let tags = [(k as u32) << PART_SHIFT, (l as u32) << PART_SHIFT];
-                    let pair = Pair { ca: i as u32, cb: j as u32, a: bi, b: bj, mu, tags };
-                    let (si, sj) = (&part_i.parry, &part_j.parry);
-                    if halfspace_points(&pair, si, &pi, sj, &pj, margin, &mut self.points) {
-                        continue;
-                    }
-                    let key = (i as u32, j as u32, k as u32, l as u32);
-                    let cache = self.pairs.entry(key).or_default();
-                    cache.stamp = self.stamp;
-                    let parts = [(si.as_ref(), &pi), (sj.as_ref(), &pj)];
-                    if terrain_points(&pair, parts, margin, cache, &mut self.epa, &mut self.points) {
-                        continue;
-                    }
-                    let pos12 = pi.inv_mul(&pj);
-                    for m in cache.manifolds.iter_mut() {
-                        m.points.clear();
-                    }
-                    if let Some((f1, f2)) = pfm_pair(si.as_ref(), sj.as_ref()) {
-                        // What parry's dispatcher does for these shapes, with the reused EPA.
-                        if cache.manifolds.is_empty() {
-                            cache.manifolds.push(Manifold::new());
-                        }
-                        let (m, epa) = (&mut cache.manifolds[0], &mut self.epa);
-                        pfm_manifold(&pos12, f1, None, f2, None, margin, ClosestPoint::Always, epa, m);
-                    } else {
-                        let res = dispatcher.contact_manifolds(
-                            &pos12,
-                            si.as_ref(),
-                            sj.as_ref(),
-                            margin,
-                            &mut cache.manifolds,
-                            &mut cache.workspace,
-                        );
-                        if res.is_err() {
-                            continue; // unsupported pair (none among this slice's shapes)
-                        }
-                    }
-                    let first = self.points.len();
-                    for m in &cache.manifolds {
-                        let n = from_vec(pi.rotation * m.local_n1);
-                        for p in &m.points {
-                            if p.dist > margin {
-                                continue;
-                            }
-                            let (pa, pb) = (
-                                from_vec(pi.transform_point(p.local_p1)),
-                                from_vec(pj.transform_point(p.local_p2)),
-                            );
-                            // parry's manifolds of a round shape against a polygonal feature can
-                            // repeat a point (cylinder or hull against a capsule): two identical
-                            // rows make A singular and the variants' round-off differ; keep one.
-                            let duplicate = self.points[first..].iter().any(|q| {
-                                (q.pa - pa).norm_squared() <= SAME_POINT_SQ
-                                    && (q.pb - pb).norm_squared() <= SAME_POINT_SQ
-                                    && q.n.dot(&n) >= SAME_NORMAL_COS
-                            });
-                            if duplicate {
-                                continue;
-                            }
-                            self.points.push(pair.point(
-                                [p.fid1.0 | tags[0], p.fid2.0 | tags[1]],
-                                pa,
-                                pb,
-                                n,
-                                p.dist,
-                            ));
-                        }
-                    }
-                }
+    }
+
+    /// Contact points of colliders `i` and `j` (friction `mu`), part by part.
+    fn collider_pair_points(&mut self, colliders: &[Collider], i: usize, j: usize, mu: f64, margin: f64) {
+        let (ci, cj) = (&colliders[i], &colliders[j]);
+        let (bi, bj) = (ci.body.index(), cj.body.index());
+        for (k, part_i) in ci.parts.iter().enumerate() {
+            for (l, part_j) in cj.parts.iter().enumerate() {
+                let (pi, pj) = (self.poses[self.first[i] + k], self.poses[self.first[j] + l]);
+                // A compound's part index tags the feature ids (0 for other shapes).
+                let tags = [(k as u32) << PART_SHIFT, (l as u32) << PART_SHIFT];
+                let pair = Pair { ca: i as u32, cb: j as u32, a: bi, b: bj, mu, tags };
+                let key = (i as u32, j as u32, k as u32, l as u32);
+                self.part_pair_points(&pair, key, (&part_i.parry, &pi), (&part_j.parry, &pj), margin);
             }
         }
-        let stamp = self.stamp;
-        self.pairs.retain(|_, c| c.stamp == stamp);
+    }
+
+    /// Contact points of one pair of parts: a half-space, a terrain, or the cached manifolds of two
+    /// convex parts.
+    fn part_pair_points(
+        &mut self,
+        pair: &Pair,
+        key: (u32, u32, u32, u32),
+        (si, pi): (&SharedShape, &Pose),
+        (sj, pj): (&SharedShape, &Pose),
+        margin: f64,
+    ) {
+        if halfspace_points(pair, si, pi, sj, pj, margin, &mut self.points) {
+            return;
+        }
+        let cache = self.pairs.entry(key).or_default();
+        cache.stamp = self.stamp;
+        let parts = [(si.as_ref(), pi), (sj.as_ref(), pj)];
+        if terrain_points(pair, parts, margin, cache, &mut self.epa, &mut self.points) {
+            return;
+        }
+        if !cache.convex_manifolds(&pi.inv_mul(pj), si.as_ref(), sj.as_ref(), margin, &mut self.epa) {
+            return; // unsupported pair (none among this slice's shapes)
+        }
+        let first = self.points.len();
+        for m in &cache.manifolds {
+            push_manifold_points(pair, [pi, pj], m, margin, first, &mut self.points, |p| {
+                [p.fid1.0 | pair.tags[0], p.fid2.0 | pair.tags[1]]
+            });
+        }
+    }
+}
+
+impl PairCache {
+    /// The manifolds of two convex parts at relative pose `pos12`; `false` for a pair parry does
+    /// not support.
+    fn convex_manifolds(
+        &mut self,
+        pos12: &Pose,
+        si: &dyn ParryShape,
+        sj: &dyn ParryShape,
+        margin: f64,
+        epa: &mut EPA,
+    ) -> bool {
+        for m in self.manifolds.iter_mut() {
+            m.points.clear();
+        }
+        if let Some((f1, f2)) = pfm_pair(si, sj) {
+            // What parry's dispatcher does for these shapes, with the reused EPA.
+            if self.manifolds.is_empty() {
+                self.manifolds.push(Manifold::new());
+            }
+            let m = &mut self.manifolds[0];
+            pfm_manifold(pos12, f1, None, f2, None, margin, ClosestPoint::Always, epa, m);
+            true
+        } else {
+            DefaultQueryDispatcher
+                .contact_manifolds(pos12, si, sj, margin, &mut self.manifolds, &mut self.workspace)
+                .is_ok()
+        }
+    }
+
+    /// The manifold slot of terrain triangle `id`, marked met this step; a triangle not yet in the
+    /// list gets a slot (a spare manifold when there is one) in index order.
+    fn triangle_slot(&mut self, id: u32) -> usize {
+        let slot = match self.triangles.binary_search_by_key(&id, |t| t.0) {
+            Ok(slot) => slot,
+            Err(slot) => {
+                self.triangles.insert(slot, (id, false));
+                self.manifolds.insert(slot, self.spare.pop().unwrap_or_default());
+                slot
+            }
+        };
+        self.triangles[slot].1 = true;
+        slot
+    }
+
+    /// Moves the manifolds of the triangles this step did not meet to the spares.
+    fn drop_unmet_triangles(&mut self) {
+        for k in (0..self.triangles.len()).rev() {
+            if !self.triangles[k].1 {
+                self.triangles.remove(k);
+                let mut m = self.manifolds.remove(k);
+                m.points.clear();
+                self.spare.push(m);
+            }
+        }
+    }
+}
+
+/// Adds the points of manifold `m` (parts A and B at the poses `pi`, `pj`) within `margin` to
+/// `out`, with the feature ids `features` gives; a point already in `out[first..]` (same points,
+/// same normal) is left out: parry's manifolds of a round shape against a polygonal feature can
+/// repeat a point (cylinder or hull against a capsule), and a point on an edge or vertex shared by
+/// terrain triangles comes from each of them (the lowest triangle's is kept). Two identical rows
+/// make A singular and the variants' round-off differ.
+fn push_manifold_points(
+    pair: &Pair,
+    [pi, pj]: [&Pose; 2],
+    m: &Manifold,
+    margin: f64,
+    first: usize,
+    out: &mut Vec<ContactPoint>,
+    features: impl Fn(&TrackedContact<()>) -> [u32; 2],
+) {
+    let n = from_vec(pi.rotation * m.local_n1);
+    for p in &m.points {
+        if p.dist > margin {
+            continue;
+        }
+        let (pa, pb) = (from_vec(pi.transform_point(p.local_p1)), from_vec(pj.transform_point(p.local_p2)));
+        let duplicate = out[first..].iter().any(|q| {
+            (q.pa - pa).norm_squared() <= SAME_POINT_SQ
+                && (q.pb - pb).norm_squared() <= SAME_POINT_SQ
+                && q.n.dot(&n) >= SAME_NORMAL_COS
+        });
+        if duplicate {
+            continue;
+        }
+        out.push(pair.point(features(p), pa, pb, n, p.dist));
     }
 }
 
@@ -388,7 +464,6 @@ fn terrain_points(
         (None, Some(t)) => (t, pj, si, pi, true),
         _ => return false,
     };
-    let dispatcher = DefaultQueryDispatcher;
     let pos12 = pi.inv_mul(pj);
     let aabb = other.compute_aabb(&pt.inv_mul(po)).loosened(margin);
     let other_pfm = match (other.as_ball(), other.as_cuboid()) {
@@ -398,93 +473,68 @@ fn terrain_points(
     for t in cache.triangles.iter_mut() {
         t.1 = false;
     }
-    let (triangles, manifolds, spare) = (&mut cache.triangles, &mut cache.manifolds, &mut cache.spare);
     terrain.for_each_triangle(&aabb, &mut |id, tri, normals| {
-        let slot = match triangles.binary_search_by_key(&id, |t| t.0) {
-            Ok(slot) => slot,
-            Err(slot) => {
-                triangles.insert(slot, (id, false));
-                manifolds.insert(slot, spare.pop().unwrap_or_default());
-                slot
-            }
-        };
-        triangles[slot].1 = true;
-        let manifold = &mut manifolds[slot];
+        let slot = cache.triangle_slot(id);
+        let manifold = &mut cache.manifolds[slot];
         manifold.points.clear();
         let normals = normals.as_ref().map(|n| n as &dyn NormalConstraints);
-        let tri_pfm = (tri as &dyn PolygonalFeatureMap, 0.0);
-        match other_pfm {
-            // Polygonal-feature shapes other than the cuboid go through GJK/EPA with a reused EPA.
-            Some(pfm) if flipped => pfm_manifold(
-                &pos12,
-                pfm,
-                None,
-                tri_pfm,
-                normals,
-                margin,
-                ClosestPoint::IfNoneClipped,
-                epa,
-                manifold,
-            ),
-            Some(pfm) => pfm_manifold(
-                &pos12,
-                tri_pfm,
-                normals,
-                pfm,
-                None,
-                margin,
-                ClosestPoint::IfNoneClipped,
-                epa,
-                manifold,
-            ),
-            // Ball and cuboid: parry's dedicated queries (no EPA). Unsupported pairs (none among
-            // the convex shapes) leave the manifold empty.
-            None if flipped => {
-                let _ = dispatcher
-                    .contact_manifold_convex_convex(&pos12, other, tri, None, normals, margin, manifold);
-            }
-            None => {
-                let _ = dispatcher
-                    .contact_manifold_convex_convex(&pos12, tri, other, normals, None, margin, manifold);
-            }
-        }
+        let convex = Convex { shape: other, pfm: other_pfm, flipped };
+        triangle_manifold(&pos12, convex, tri, normals, margin, epa, manifold);
     });
-    for k in (0..triangles.len()).rev() {
-        if !triangles[k].1 {
-            triangles.remove(k);
-            let mut m = manifolds.remove(k);
-            m.points.clear();
-            spare.push(m);
-        }
-    }
+    cache.drop_unmet_triangles();
     let first = out.len();
-    for (&(triangle, _), m) in triangles.iter().zip(manifolds.iter()) {
-        let n = from_vec(pi.rotation * m.local_n1);
-        for p in &m.points {
-            if p.dist > margin {
-                continue;
-            }
-            let (pa, pb) =
-                (from_vec(pi.transform_point(p.local_p1)), from_vec(pj.transform_point(p.local_p2)));
-            // A point on an edge or vertex shared by triangles comes from each of them: with the
-            // same normal the rows are identical, keep the one of the lowest triangle.
-            let duplicate = out[first..].iter().any(|q| {
-                (q.pa - pa).norm_squared() <= SAME_POINT_SQ
-                    && (q.pb - pb).norm_squared() <= SAME_POINT_SQ
-                    && q.n.dot(&n) >= SAME_NORMAL_COS
-            });
-            if duplicate {
-                continue;
-            }
-            let features = if flipped {
+    for (&(triangle, _), m) in cache.triangles.iter().zip(cache.manifolds.iter()) {
+        push_manifold_points(pair, [pi, pj], m, margin, first, out, |p| {
+            if flipped {
                 [p.fid1.0 | pair.tags[0], triangle_feature(p.fid2.0, triangle)]
             } else {
                 [triangle_feature(p.fid1.0, triangle), p.fid2.0 | pair.tags[1]]
-            };
-            out.push(pair.point(features, pa, pb, n, p.dist));
-        }
+            }
+        });
     }
     true
+}
+
+/// The convex part of a terrain pair: its shape, its polygonal-feature map unless it is a ball or
+/// a cuboid, and whether it is part A (the terrain then B).
+#[derive(Clone, Copy)]
+struct Convex<'a> {
+    shape: &'a dyn ParryShape,
+    pfm: Option<(&'a dyn PolygonalFeatureMap, f64)>,
+    flipped: bool,
+}
+
+/// The manifold of terrain triangle `tri` (pseudo-normals `normals`) against the convex part, at
+/// relative pose `pos12` of A and B.
+fn triangle_manifold(
+    pos12: &Pose,
+    convex: Convex<'_>,
+    tri: &Triangle,
+    normals: Option<&dyn NormalConstraints>,
+    margin: f64,
+    epa: &mut EPA,
+    manifold: &mut Manifold,
+) {
+    let tri_pfm = (tri as &dyn PolygonalFeatureMap, 0.0);
+    let other = convex.shape;
+    let closest = ClosestPoint::IfNoneClipped;
+    match convex.pfm {
+        // Polygonal-feature shapes other than the cuboid go through GJK/EPA with a reused EPA.
+        Some(pfm) if convex.flipped => {
+            pfm_manifold(pos12, pfm, None, tri_pfm, normals, margin, closest, epa, manifold)
+        }
+        Some(pfm) => pfm_manifold(pos12, tri_pfm, normals, pfm, None, margin, closest, epa, manifold),
+        // Ball and cuboid: parry's dedicated queries (no EPA). Unsupported pairs (none among
+        // the convex shapes) leave the manifold empty.
+        None if convex.flipped => {
+            let _ = DefaultQueryDispatcher
+                .contact_manifold_convex_convex(pos12, other, tri, None, normals, margin, manifold);
+        }
+        None => {
+            let _ = DefaultQueryDispatcher
+                .contact_manifold_convex_convex(pos12, tri, other, normals, None, margin, manifold);
+        }
+    }
 }
 
 /// Squared distance (m²) under which two terrain contact points are one (1 nm).
