@@ -14,6 +14,9 @@ use crate::free_endpoint;
 /// How long a server may take to listen.
 const START_LIMIT: Duration = Duration::from_secs(20);
 
+/// Starts tried on fresh ports before a test gives up.
+const START_TRIES: usize = 3;
+
 /// A world name unique to this test process and `tag`.
 pub fn world_name(tag: &str) -> String {
     format!("t{}-{tag}", std::process::id())
@@ -37,42 +40,63 @@ impl Server {
         Server::start_with(scene, tag, |_| {})
     }
 
-    /// Same, with changes to the configuration (`config.zenoh = None` for iceoryx2 only, …).
-    pub fn start_with(scene: &str, tag: &str, f: impl FnOnce(&mut ServeConfig)) -> Server {
-        let endpoint = free_endpoint();
-        let mut config = ServeConfig {
-            scene: scene.to_string(),
-            world: world_name(tag),
-            zenoh: Some(ZenohOptions { listen: vec![endpoint.clone()], ..ZenohOptions::default() }),
-            iceoryx2: true,
-            ..ServeConfig::default()
-        };
-        f(&mut config);
-        Server::spawn(config)
+    /// Same, with changes to the configuration (`config.zenoh = None` for iceoryx2 only, …). A free
+    /// port can be taken by another test's Zenoh listener before the server binds it; then the
+    /// server stops at once and the start is retried on a fresh port (at most `START_TRIES`).
+    pub fn start_with(scene: &str, tag: &str, f: impl Fn(&mut ServeConfig)) -> Server {
+        let mut last = String::new();
+        for _ in 0..START_TRIES {
+            let mut config = ServeConfig {
+                scene: scene.to_string(),
+                world: world_name(tag),
+                zenoh: Some(ZenohOptions { listen: vec![free_endpoint()], ..ZenohOptions::default() }),
+                iceoryx2: true,
+                ..ServeConfig::default()
+            };
+            f(&mut config);
+            match Server::try_spawn(config) {
+                Ok(server) => return server,
+                Err(e) => last = e,
+            }
+        }
+        panic!("the server did not start in {START_TRIES} tries: {last}");
     }
 
     /// Runs `config` on a thread; returns once its Zenoh endpoint (if any) accepts connections.
     pub fn spawn(config: ServeConfig) -> Server {
+        Server::try_spawn(config).unwrap_or_else(|e| panic!("{e}"))
+    }
+
+    /// [`Server::spawn`], with the reason as an error when the server stops during its start
+    /// (e.g. its port was taken: something else then answers the connection check, so the thread
+    /// is checked once more after it).
+    fn try_spawn(config: ServeConfig) -> Result<Server, String> {
         let endpoint = config.zenoh.as_ref().and_then(|z| z.listen.first().cloned()).unwrap_or_default();
         let world = msgs::WorldName::new(config.world.clone()).expect("a valid world name");
         let shutdown = Arc::new(AtomicBool::new(false));
         let stop = shutdown.clone();
         let thread = std::thread::spawn(move || run(&config, stop));
+        let stopped = |thread: JoinHandle<Result<ServeReport, ServeError>>| {
+            let r = thread.join().expect("the server thread");
+            format!("the server stopped during its start: {r:?}")
+        };
         let port = endpoint.rsplit(':').next().and_then(|p| p.parse::<u16>().ok());
         let deadline = Instant::now() + START_LIMIT;
         if let Some(port) = port {
             while std::net::TcpStream::connect(("127.0.0.1", port)).is_err() {
                 assert!(Instant::now() < deadline, "the server did not listen on {port}");
                 if thread.is_finished() {
-                    let r = thread.join().expect("the server thread");
-                    panic!("the server stopped: {r:?}");
+                    return Err(stopped(thread));
                 }
                 std::thread::sleep(Duration::from_millis(20));
             }
         }
         // iceoryx2 and the queryables are up right after.
         std::thread::sleep(Duration::from_millis(100));
-        Server { endpoint, world, shutdown, thread: Some(thread) }
+        if thread.is_finished() {
+            return Err(stopped(thread));
+        }
+        Ok(Server { endpoint, world, shutdown, thread: Some(thread) })
     }
 
     /// The key (= iceoryx2 service name for poses and stats) of `topic` in this world.
