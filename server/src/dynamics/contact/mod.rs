@@ -117,6 +117,8 @@ mod collide;
 mod convert;
 mod material;
 mod rows;
+
+pub(crate) use rows::orthogonal;
 mod shape;
 pub mod terrain;
 

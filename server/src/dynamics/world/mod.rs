@@ -355,15 +355,7 @@ fn unit_axis(name: &str, axis: Vector3<f64>) -> Result<Vector3<f64>, JointError>
 /// Rotation whose x axis is `axis` (validated unit), with a deterministic completion.
 pub(crate) fn frame_rotation(name: &str, axis: Vector3<f64>) -> Result<UnitQuaternion<f64>, JointError> {
     let e1 = unit_axis(name, axis)?;
-    // Helper: the world axis least aligned with e1.
-    let helper = if e1.x.abs() <= e1.y.abs() && e1.x.abs() <= e1.z.abs() {
-        Vector3::x()
-    } else if e1.y.abs() <= e1.z.abs() {
-        Vector3::y()
-    } else {
-        Vector3::z()
-    };
-    let e2 = (helper - e1 * e1.dot(&helper)).normalize();
+    let e2 = crate::dynamics::contact::orthogonal(&e1);
     let e3 = e1.cross(&e2);
     Ok(UnitQuaternion::from_basis_unchecked(&[e1, e2, e3]))
 }
