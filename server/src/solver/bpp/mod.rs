@@ -509,8 +509,11 @@ impl Solver {
                 self.tight[new] = self.state[new].is_tight();
             }
         }
-        self.state0.clear();
-        self.state0.extend_from_slice(&self.state);
+        // Kept only for the Newton-first attempt, which restores it on failure.
+        if self.opts.newton_first {
+            self.state0.clear();
+            self.state0.extend_from_slice(&self.state);
+        }
     }
 
     /// Residual against the true bounds and status of the answer in `λ`, which it writes into
