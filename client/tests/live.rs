@@ -331,6 +331,15 @@ fn malformed_frames_are_counted_and_skipped() {
     pivotsim_msgs::ControlRequest { id: 1, command: pivotsim_msgs::ControlCommand::Pause }
         .encode(&mut valid_but_wrong)
         .unwrap();
+    // A connected peer may not have declared its subscriber yet: frames put before that reach
+    // nobody (a full-suite run counted 0 of 30). Wait until the watcher subscribes.
+    let probe = session.declare_publisher(poses.clone()).wait().unwrap();
+    let deadline = Instant::now() + Duration::from_secs(10);
+    while !probe.matching_status().wait().unwrap().matching() {
+        assert!(Instant::now() < deadline, "the watcher never subscribed to {poses}");
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    drop(probe);
     for i in 0..10u8 {
         session.put(&poses, vec![i; 7]).wait().unwrap();
         session.put(&stats, b"PVSM\x01\x00\x02\x00\xff\xff\xff\xff\x00\x00\x00\x00".to_vec()).wait().unwrap();
