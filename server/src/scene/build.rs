@@ -600,6 +600,9 @@ impl<'a> Builder<'a> {
         if let Some(b) = sec.safeguard_after_update {
             settings.solver.safeguard_after_update = b;
         }
+        if let Some(n) = sec.murty_after {
+            settings.solver.murty_after = n;
+        }
         if let Some(n) = sec.polish_sweeps {
             settings.solver.polish_sweeps = n;
         }

@@ -52,6 +52,7 @@ pub(crate) struct SceneSection {
     pub max_solve_us: Option<f64>,
     pub newton_first: Option<bool>,
     pub safeguard_after_update: Option<bool>,
+    pub murty_after: Option<usize>,
     pub polish_sweeps: Option<usize>,
     pub projection_iterations: Option<usize>,
     pub warm_start: Option<bool>,

@@ -9,7 +9,7 @@
 //! semismooth Newton step on the natural map `r(λ) = λ − clamp(λ − w, lo, hi)`.
 //!
 //! **Safeguard.** When the number of infeasible variables has not decreased for `murty_after`
-//! steps, either Murty's rule pivots only the infeasible variable of largest index (Júdice–Pires:
+//! steps (default 0: at the first block pivot that does not lower it), either Murty's rule pivots only the infeasible variable of largest index (Júdice–Pires:
 //! finite for SPD `A` and fixed bounds, [`Fallback::Murty`]), or — the default,
 //! [`Fallback::ProjectedNewton`] — a primal feasible active-set method on the strictly convex box
 //! QP whose optimality system the boxed LCP is (`safeguard.rs`): projected Newton steps while they
@@ -38,17 +38,46 @@
 //!   uncapped) stops short, the step after starts from a poorer state and warm start, and
 //!   1,000+ of the 1,200 solves end capped. Tail steps, not typical ones, decide such a run.
 //!
-//! **After an outer friction update** ([`SolverOptions::safeguard_after_update`], off by default;
+//! **After an outer friction update** ([`SolverOptions::safeguard_after_update`], on by default;
 //! scene setting `safeguard_after_update`) the frozen problem changed only by its friction boxes;
-//! the solve can continue with the active-set safeguard from the projection of the last solution
-//! onto the new boxes, where block pivots from the old index set flail 10–20 steps among
-//! redundant contacts (forklift at contact compliance 1e-10), and hand over to the semismooth
-//! Newton fallback after 4 stalled updates (12 without it). Measured: corpus within 35 steps warm
-//! 12 → 14 and cold 13 → 16 of 30, within 100 both 20 → 21; but beyond 100 steps worse (11 files
-//! not within 1000, were 6), and in simulation it moved the forwarder's log 11.7 cm from the
-//! exact run at cap 35 (4.9 cm without), and with the stall limit at 12 opened the pin joint by
-//! 4.6 cm at the shipped cap of 300: the friction cycles of the grasp cost active-set steps
-//! instead of block pivots. So it is a setting, not the default.
+//! the solve continues with the active-set safeguard from the last index set, its tight rows at
+//! their moved bounds and the free ones projected onto theirs (`Start::IndexSet`), where block
+//! pivots from that index set flail 10–20 steps among redundant contacts (forklift at contact
+//! compliance 1e-10), and hands over to the semismooth Newton fallback after 4 stalled updates
+//! (12 without it). Together with `murty_after = 0` (the safeguard from the first block pivot
+//! that does not lower the infeasible count) this is the default since it was measured in
+//! simulation, at the paper's cap of 35, against the earlier defaults (`murty_after = 3`, block
+//! pivots after updates); capped solves of 20 s runs, `auto` / `skyline`:
+//!
+//! | scene | earlier defaults | now |
+//! |---|---|---|
+//! | forklift, shipped | 0 / 0 | 0 / 0 |
+//! | forklift, contact compliance 1e-10 | 139 / 143 | 7 / 7 |
+//! | winch, shipped | 0 / 0 | 0 / 0 |
+//! | winch, contact compliance 1e-10 | 42 / 42 | 50 / 44 |
+//! | forwarder, shipped | 55 / 112 | 20 / 20 |
+//!
+//! On the corpus (warm starts cut from capped runs) it gains warm files (within 35 steps 12 → 15
+//! of 30, within 100 19 → 22) and loses cold ones within 35 (13 → 11). Its price is the tail of
+//! friction cycles, which the safeguarded updates do not break: when they stall and the Newton
+//! fallback after them does too, the solve goes on with block pivots after its updates. With no
+//! cap (1000) the winch at 1e-10 then has 27 solves above 35 steps (earlier defaults 40) and 9 that
+//! never converge (earlier defaults 8; 15 without the switch). Starting the safeguard from the ε-binding set of the projected iterate
+//! instead, as it starts after a stalled block pivot, lost the rows whose bounds had moved away
+//! (the winch's chain: 116 bound rows before an update, 73 after, then one ratio-test step per
+//! row to bind them again): 153 capped solves on that winch and 116 on the forwarder.
+//! What else was measured and dropped (session of 2026-12-01, corpus and scenes): an exact
+//! search along the projected Newton path (first local minimiser of the piecewise quadratic, so
+//! several bounds bind per step) changed no count — its first minimiser comes after 1–5
+//! breakpoints; a regularised (Levenberg–Marquardt) semismooth Newton step `(A_FF + ρI)`,
+//! `ρ ∝ ‖r‖`, solved 6–7 of 30 warm files within 35 steps instead of 15 (the flat directions of redundant contacts
+//! converge at the rate `ρ/(ρ + σ)`); a first solve with a larger compliance as a warm start
+//! (`A + δI`, δ = 1e-6…1e-3 of the largest diagonal) converged in 7–18 steps, but its index set
+//! was far from the true one (the stiff contacts' impulses are set by the compliance: the
+//! optimum's `f` −96 against −733) and the whole took 45–66 steps; ordering the warm start's
+//! tight rows last (deletions then cost nothing) turned the winch's band (bandwidth 20) into an
+//! arrow (73) and made it 3× slower. The step counts of eight strategies on every corpus file
+//! are in the corpus README.
 //!
 //! **Semismooth Newton first** ([`SolverOptions::newton_first`], off by default; scene setting
 //! `newton_first`): a warm-started solve with friction first takes up to `NEWTON_FIRST_BUDGET`
@@ -107,6 +136,8 @@ mod factor;
 mod safe;
 mod safeguard;
 
+use safeguard::Start;
+
 use std::time::Instant;
 
 use super::envelope::Envelope;
@@ -128,7 +159,8 @@ pub struct SolverOptions {
     /// Time budget (µs): of one solve, or — set by the world — of all island solves of a step. A
     /// solve that spends it returns its best safe iterate with status `Budget` (`None`: no budget).
     pub max_solve_us: Option<f64>,
-    /// Steps without a decrease of the infeasible count before Murty's single pivot.
+    /// Block pivots without a decrease of the infeasible count before the safeguard takes over
+    /// (0: at the first that does not decrease it; measured in the module docs).
     pub murty_after: usize,
     /// Measure `‖L_deleted − chol(A_FF)‖_F` at every deletion step (costly; for Table 4).
     pub measure_deletion_error: bool,
@@ -155,7 +187,7 @@ pub struct SolverOptions {
     /// steps, left early when it stalls), then the block pivoting from the warm start.
     pub newton_first: bool,
     /// After an outer update of the friction bounds, continue with the active-set safeguard from
-    /// the projection of the last solution onto the new boxes instead of block pivots.
+    /// the last index set (tight rows at their moved bounds) instead of block pivots.
     pub safeguard_after_update: bool,
     /// Projected Gauss–Seidel sweeps that polish the safe answer of a solve that did not converge
     /// (`safe.rs`); 0 turns the polish off.
@@ -175,7 +207,7 @@ impl Default for SolverOptions {
             max_steps: 35,
             tol_rel: 1e-10,
             max_solve_us: None,
-            murty_after: 3,
+            murty_after: 0,
             measure_deletion_error: false,
             refine: true,
             pgs: PgsOptions::default(),
@@ -188,7 +220,7 @@ impl Default for SolverOptions {
             newton_first: false,
             polish_sweeps: POLISH_SWEEPS,
             polish_above: 1e-3,
-            safeguard_after_update: false,
+            safeguard_after_update: true,
         }
     }
 }
@@ -644,7 +676,7 @@ impl Solver {
     /// After the friction bounds followed the new normal impulses (outer iteration): a stalled
     /// outer iteration (cycling between index sets) hands over to the semismooth Newton method on
     /// the whole natural map, from the best iterate; with [`SolverOptions::safeguard_after_update`]
-    /// the active-set safeguard continues from the projection onto the new boxes.
+    /// the active-set safeguard continues from the last index set, its tight rows at the new bounds.
     fn outer_update(&mut self, variant: Variant, progress: &mut Progress) -> Next {
         self.stats.friction_updates += 1;
         progress.best_ninf = usize::MAX;
@@ -655,8 +687,8 @@ impl Solver {
         } else {
             progress.outer_stall += 1;
         }
-        let stall_limit =
-            if self.opts.safeguard_after_update { OUTER_STALL_SAFEGUARDED } else { OUTER_STALL };
+        let safeguarded = self.opts.safeguard_after_update && !progress.block_pivots;
+        let stall_limit = if safeguarded { OUTER_STALL_SAFEGUARDED } else { OUTER_STALL };
         if progress.outer_stall >= stall_limit && self.opts.newton_fallback {
             self.lam.copy_from_slice(&self.best);
             self.compute_w();
@@ -664,10 +696,14 @@ impl Solver {
                 return Next::Return(true);
             }
             // Not there within its budget: resume the outer iteration from the best iterate seen
-            // (Newton's or the outer loop's).
+            // (Newton's or the outer loop's), with block pivots after its updates from now on
+            // (friction cycles that the safeguarded updates do not break, measured on
+            // `scene-shaped/scene-winch370`: not within 1000 steps without this switch, 205 with it; the
+            // earlier defaults took 160).
             if self.non_finite {
                 return Next::Return(false);
             }
+            progress.block_pivots = true;
             self.lam.copy_from_slice(&self.best);
             self.compute_w();
             let (_, rr) = super::natural_residual(&self.lam, &self.w, &self.lop, &self.hip, &self.fip);
@@ -676,12 +712,12 @@ impl Solver {
             progress.outer_stall = 0;
             self.update_bounds();
         }
-        if self.opts.safeguard_after_update {
-            // The bounds moved a little: from the projection of the last solution onto the new
-            // boxes the monotone active-set method needs few steps, where block pivots from its
-            // index set flail among redundant contacts.
+        if safeguarded {
+            // The bounds moved a little: from the last index set, its tight rows at the new
+            // bounds, the monotone active-set method needs few steps, where block pivots from it
+            // flail among redundant contacts.
             self.stats.fallback = true;
-            if !self.projected_newton(variant) {
+            if !self.projected_newton(variant, Start::IndexSet) {
                 return Next::Return(false);
             }
             return Next::Resolved;
@@ -719,7 +755,7 @@ impl Solver {
                 Next::Pivot
             }
             Fallback::ProjectedNewton => {
-                if !self.projected_newton(variant) {
+                if !self.projected_newton(variant, Start::BindingSet) {
                     return Next::Return(false);
                 }
                 progress.best_ninf = usize::MAX;
@@ -914,11 +950,20 @@ struct Progress {
     no_progress: usize,
     outer_best: f64,
     outer_stall: usize,
+    /// The safeguarded outer iteration and the Newton fallback both stalled: block pivots after
+    /// the remaining outer updates.
+    block_pivots: bool,
 }
 
 impl Default for Progress {
     fn default() -> Self {
-        Progress { best_ninf: usize::MAX, no_progress: 0, outer_best: f64::INFINITY, outer_stall: 0 }
+        Progress {
+            best_ninf: usize::MAX,
+            no_progress: 0,
+            outer_best: f64::INFINITY,
+            outer_stall: 0,
+            block_pivots: false,
+        }
     }
 }
 
