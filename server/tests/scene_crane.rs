@@ -62,7 +62,8 @@ fn body(w: &World, name: &str) -> usize {
 fn watch(w: &World) -> Watch {
     let h = w.settings().timestep;
     let colliders = w.colliders();
-    let name = |c: pivotsim_server::dynamics::ColliderId| w.bodies()[colliders[c.index()].body().index()].name();
+    let name =
+        |c: pivotsim_server::dynamics::ColliderId| w.bodies()[colliders[c.index()].body().index()].name();
     let (ground, pipe, hook) = (body(w, "ground"), body(w, "pipe"), body(w, "hook"));
     let mut watched = Watch {
         time: w.time(),
@@ -76,7 +77,8 @@ fn watch(w: &World) -> Watch {
             .fold(0.0, f64::max),
     };
     for c in w.contacts().filter(|c| c.normal_impulse > 0.0) {
-        let (a, b) = (colliders[c.collider_a.index()].body().index(), colliders[c.collider_b.index()].body().index());
+        let (a, b) =
+            (colliders[c.collider_a.index()].body().index(), colliders[c.collider_b.index()].body().index());
         let pair = |x: usize, y: usize| (a == x && b == y) || (a == y && b == x);
         if pair(hook, pipe) {
             watched.hook_on_pipe = true;
@@ -99,7 +101,8 @@ fn watch(w: &World) -> Watch {
 fn run_watched(variant: Variant, duration: f64, set: &[&str]) -> (SceneRun, Vec<Watch>) {
     let set: Vec<_> = set.iter().map(|s| s.parse().expect("override")).collect();
     let mut sc = scene::load_with("crane", &set).expect("crane");
-    let opts = RunOptions { duration: Some(duration), variant: Some(variant), every: 1, ..RunOptions::default() };
+    let opts =
+        RunOptions { duration: Some(duration), variant: Some(variant), every: 1, ..RunOptions::default() };
     let (mut positions, mut watched) = (Vec::new(), Vec::new());
     let summary = run_scene_observed(&mut sc, &opts, |w| {
         positions.push(w.bodies().iter().map(|b| b.position()).collect());
@@ -173,7 +176,10 @@ fn crane_hoists_the_pipe_by_contact_and_it_hangs_still() {
         watched.iter().find(|w| !w.pipe_on_ground).expect("the pipe never leaves the ground").time;
     eprintln!("hook touches the pipe at {first_touch:.3} s, the pipe leaves the ground at {lifted_off:.3} s");
     assert!(first_touch > HOIST_START, "touch at {first_touch} s, before hoisting");
-    assert!(lifted_off > first_touch, "lifted off at {lifted_off} s, before the hook touched at {first_touch} s");
+    assert!(
+        lifted_off > first_touch,
+        "lifted off at {lifted_off} s, before the hook touched at {first_touch} s"
+    );
     assert!(watched.iter().filter(|w| w.time >= lifted_off).all(|w| w.hook_on_pipe && !w.pipe_on_ground));
 
     // Lifted ≥ 1 m (by the end of the paper's 20 s and at the end).
@@ -186,7 +192,9 @@ fn crane_hoists_the_pipe_by_contact_and_it_hangs_still() {
     // Hanging still: the swing of the first period after the script ends exceeds the last one's.
     let first = swing(&sky, &watched, pipe, SCRIPT_END, SCRIPT_END + PERIOD);
     let last = swing(&sky, &watched, pipe, DURATION - PERIOD, DURATION);
-    eprintln!("pipe swing peak to peak: {first:.4} m in the first period after the lift, {last:.4} m in the last");
+    eprintln!(
+        "pipe swing peak to peak: {first:.4} m in the first period after the lift, {last:.4} m in the last"
+    );
     assert!(last < first, "the swing grows: {first} m, then {last} m");
     assert!(last < 0.05, "the pipe swings {last} m");
 
@@ -201,7 +209,9 @@ fn crane_hoists_the_pipe_by_contact_and_it_hangs_still() {
     let carried_after = mass(&|_| true);
     let before = watched.iter().rev().find(|w| w.time < HOIST_START).expect("a step before hoisting");
     let after = watched.last().unwrap();
-    for (when, at, carried) in [("before hoisting", before, carried_before), ("hanging", after, carried_after)] {
+    for (when, at, carried) in
+        [("before hoisting", before, carried_before), ("hanging", after, carried_after)]
+    {
         let err = at.pad_reaction / (carried * g) - 1.0;
         eprintln!(
             "{when} (t = {:.2} s, machine speed {:.1e} m/s): pads carry {:.0} N, weight {:.0} N ({carried:.0} kg), \
