@@ -22,10 +22,10 @@ use super::controls::{
 use super::format::*;
 use super::{Scene, SceneError};
 use crate::dynamics::{
-    BodyBuilder, BodyId, ChainBuilder, ChainEnd, ChainShape, ColliderBuilder, CollisionGroups,
+    BodyBuilder, BodyId, Buoyancy, ChainBuilder, ChainEnd, ChainShape, ColliderBuilder, CollisionGroups,
     CouplingBuilder, CouplingId, ForceElement, FreeAxis, GeometricStiffness, JointBuilder, JointFrames,
     JointId, JointKind, JointLimit, JointMotor, Material, ModelError, Shape, SpringDamper, WatchdogSettings,
-    World, WorldSettings, box_inertia, capsule_inertia, cylinder_inertia, sphere_inertia,
+    Water, Wave, World, WorldSettings, box_inertia, capsule_inertia, cylinder_inertia, sphere_inertia,
 };
 
 /// Builder state: the world so far and name tables.
@@ -481,6 +481,47 @@ impl Builder<'_> {
     }
 }
 
+impl Builder<'_> {
+    /// A `[[buoyancy]]`: a box hull of full extents `size` centred at `centre` (body frame), sampled
+    /// by a `grid` of vertical slabs ([`Buoyancy::box_grid`]), in water of `density` (default sea
+    /// water, 1025 kg/m³) at `level`, with drag and an optional wave of the level (`period` in s,
+    /// `phase` in degrees).
+    fn add_buoyancy(&mut self, span: &Range<usize>, d: &BuoyancyDef) -> R<()> {
+        let body = self.body(span, "body", &d.body)?;
+        let mut half = self.vec3(span, "size", d.size)? / 2.0;
+        for c in half.iter_mut() {
+            *c = self.positive(span, "size", *c)?;
+        }
+        let centre = self.vec3(span, "centre", d.centre)?;
+        if d.grid[0] == 0 || d.grid[1] == 0 || d.grid[0] * d.grid[1] > 10_000 {
+            return Err(self.invalid(span, "grid", "1 to 10000 sample points in all"));
+        }
+        let mut water = Water::still(
+            self.finite(span, "level", d.level)?,
+            self.positive(span, "density", d.density.unwrap_or(1025.0))?,
+        );
+        if let Some(w) = &d.wave {
+            let period = self.positive(span, "wave", w.period)?;
+            water.wave = Some(Wave {
+                amplitude: self.non_negative(span, "wave", w.amplitude)?,
+                angular_frequency: std::f64::consts::TAU / period,
+                phase: self.finite(span, "wave", w.phase)?.to_radians(),
+            });
+        }
+        let mut el = Buoyancy::box_grid(body, half, d.grid[0], d.grid[1], water).with_drag(
+            self.non_negative(span, "linear_drag", d.linear_drag)?,
+            self.non_negative(span, "quadratic_drag", d.quadratic_drag)?,
+        );
+        for p in &mut el.points {
+            p.position += centre;
+        }
+        self.world
+            .add_force(&d.name, ForceElement::Buoyancy(el))
+            .map_err(|e| self.model(span, &d.name, e))?;
+        Ok(())
+    }
+}
+
 /// `{i}`, `{i-1}`, `{i+1}` in names of instance `i`.
 fn subst(s: &str, i: usize) -> String {
     if !s.contains('{') {
@@ -703,6 +744,9 @@ impl<'a> Builder<'a> {
         }
         for d in &parsed.cable {
             self.add_cable(&d.span(), d.get_ref())?;
+        }
+        for d in &parsed.buoyancy {
+            self.add_buoyancy(&d.span(), d.get_ref())?;
         }
         for c in &parsed.coupling {
             self.add_coupling(&c.span(), c.get_ref())?;

@@ -30,6 +30,7 @@ pub const BUILTIN: &[BuiltinScene] = &[
     scene!("forwarder", "a 16-link 1,900 kg forwarder crane grasps a 400 kg log, lifts it and slews"),
     scene!("winch", "a 400 kg drum winds a chain of 50 × 1 kg capsules dragged along the ground"),
     scene!("forklift", "a 3 t forklift lifts a crate on a pallet and turns 360° around a cone"),
+    scene!("crane", "a 30 t mobile crane on outriggers hoists a 2 t concrete pipe on a 70 kg cable"),
 ];
 
 /// The built-in scene `name`.

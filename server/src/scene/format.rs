@@ -27,6 +27,8 @@ pub(crate) struct SceneFile {
     #[serde(default)]
     pub cable: Vec<Spanned<CableDef>>,
     #[serde(default)]
+    pub buoyancy: Vec<Spanned<BuoyancyDef>>,
+    #[serde(default)]
     pub actuator: Vec<Spanned<ActuatorDef>>,
     #[serde(default)]
     pub joystick: Option<Spanned<JoystickDef>>,
@@ -226,6 +228,36 @@ pub(crate) struct CableDef {
     pub drum_radius: Option<f64>,
     pub compliance: Option<f64>,
     pub damping: Option<[f64; 2]>,
+}
+
+/// `[[buoyancy]]`: a box hull floating in water (`dynamics/buoyancy.rs`).
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct BuoyancyDef {
+    pub name: String,
+    pub body: String,
+    pub size: [f64; 3],
+    #[serde(default)]
+    pub centre: [f64; 3],
+    pub grid: [usize; 2],
+    #[serde(default)]
+    pub level: f64,
+    pub density: Option<f64>,
+    #[serde(default)]
+    pub linear_drag: f64,
+    #[serde(default)]
+    pub quadratic_drag: f64,
+    pub wave: Option<WaveDef>,
+}
+
+/// A buoyancy's prescribed wave of the water level.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct WaveDef {
+    pub amplitude: f64,
+    pub period: f64,
+    #[serde(default)]
+    pub phase: f64,
 }
 
 /// `[[repeat]]`: bodies, joints and springs written once, instantiated `count` times.
