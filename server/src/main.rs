@@ -97,6 +97,18 @@ enum Command {
         #[arg(long)]
         data: Option<PathBuf>,
     },
+    /// The speed/accuracy report: every paper scene with every variant, the paper's Tables 2–4 and
+    /// Fig. 3, 5/6, 7 beside its numbers, residual against time for PGS and block pivoting, warm
+    /// starts, and the extremes of compliance and mass ratio (README.md, report.json, steps.csv,
+    /// SVG figures)
+    Report {
+        /// Output directory (default: report-out/).
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// Shorter runs and fewer points (a few minutes instead of about twenty).
+        #[arg(long)]
+        quick: bool,
+    },
 }
 
 fn main() -> ExitCode {
@@ -135,6 +147,14 @@ fn main() -> ExitCode {
         Some(Command::BenchSolver { out, quick, data }) => {
             let cfg = cli::bench::BenchConfig::new(out, quick, data);
             cli::bench::run(&cfg).map(|_| ())
+        }
+        Some(Command::Report { out, quick }) => {
+            let cfg = cli::report::ReportConfig {
+                out: out.unwrap_or_else(|| PathBuf::from("report-out")),
+                quick,
+                tiny: false,
+            };
+            cli::report::run(&cfg).map(|_| ())
         }
         Some(Command::Serve(args)) => cli::serve::serve(args),
         None => cli::serve::serve(cli.serve),

@@ -6,6 +6,7 @@
 //! |---|---|
 //! | `bench/` | `bench-solver`: kernel crossover, paper Fig. 4, every variant on every problem |
 //! | `pattern.rs` | `pattern`: sparsity plots of an MLCP file (paper Fig. 5 and 6) |
+//! | `report/` | `report`: the speed/accuracy report (paper Tables 2–4, Fig. 3, 5/6, 7, the trade, extremes) |
 //! | `run.rs` | `run` (a scene headless) and `scenes` |
 //! | `serve.rs` | `serve`, the default: options, the start message, the final report |
 //! | `solve.rs` | `solve`: one MLCP file, text or JSON (`SolveStats` as it serializes) |
@@ -13,6 +14,7 @@
 
 pub mod bench;
 pub mod pattern;
+pub mod report;
 pub mod run;
 pub mod serve;
 pub mod solve;

@@ -58,7 +58,8 @@ use kernels::{
 use plan::{LONG_STEPS, Plan, SHORT_STEPS};
 use plots::{plot_fig4, plot_solve_times};
 use problems::{ProblemResult, run_problem};
-use report::{Report, Summary, build_kind, cpu_name, markdown, summarize, summary_text};
+use report::{Report, Summary, markdown, summarize, summary_text};
+pub use report::{build_kind, cpu_name};
 
 /// What to run and where to write it.
 #[derive(Debug, Clone)]

@@ -1,0 +1,103 @@
+//! What the full, quick and tiny modes run.
+
+use pivotsim_server::solver::Variant;
+
+use super::ReportConfig;
+
+/// Scenes, variants, durations and sweep points of one mode.
+#[derive(Debug, Clone)]
+pub struct Plan {
+    /// `full`, `quick` or `tiny`.
+    pub mode: &'static str,
+    /// Built-in scenes of stage 1–3.
+    pub scenes: Vec<&'static str>,
+    /// Exact variants of stage 1 (`full` first: the others' speed-up is over it).
+    pub variants: Vec<Variant>,
+    /// Simulated seconds of each scene run (`None`: the scene's own, 20 s).
+    pub duration: Option<f64>,
+    /// The `auto` run dumps its islands every this many steps.
+    pub dump_every: usize,
+    /// Islands per scene analysed in stage 2 (spread over the run).
+    pub islands: usize,
+    /// PGS sweeps of the trade.
+    pub pgs_sweeps: Vec<usize>,
+    /// Block-pivoting caps of the trade.
+    pub bpp_caps: Vec<usize>,
+    /// Repeats of each timed solve in the trade (the fastest counts).
+    pub repeats: usize,
+    /// Compliances of the winch sweep (joints and contacts alike).
+    pub compliances: Vec<f64>,
+    /// Mass ratios (load / lightest body) of the crane sweep.
+    pub mass_ratios: Vec<f64>,
+    /// Simulated seconds of each extremes run.
+    pub extreme_duration: f64,
+}
+
+impl Plan {
+    /// The plan of a configuration.
+    pub fn for_config(cfg: &ReportConfig) -> Self {
+        if cfg.tiny {
+            return Plan {
+                mode: "tiny",
+                scenes: vec!["forklift"],
+                variants: vec![Variant::Full, Variant::Auto],
+                duration: Some(0.25),
+                dump_every: 5,
+                islands: 2,
+                pgs_sweeps: vec![1, 10],
+                bpp_caps: vec![1, 35],
+                repeats: 1,
+                compliances: vec![1e-8],
+                mass_ratios: vec![1e3],
+                extreme_duration: 0.1,
+            };
+        }
+        let all_scenes = vec!["forklift", "winch", "forwarder", "crane"];
+        let variants = vec![
+            Variant::Full,
+            Variant::Downdate,
+            Variant::Skyline,
+            Variant::SkylineRefactor,
+            Variant::Incremental,
+            Variant::Auto,
+        ];
+        if cfg.quick {
+            return Plan {
+                mode: "quick",
+                scenes: all_scenes,
+                variants,
+                duration: Some(4.0),
+                dump_every: 40,
+                islands: 4,
+                pgs_sweeps: vec![1, 10, 100, 1000],
+                bpp_caps: vec![1, 5, 35],
+                repeats: 1,
+                compliances: vec![1e-6, 1e-10, 1e-12],
+                mass_ratios: vec![1e2, 1e5, 1e9],
+                extreme_duration: 2.0,
+            };
+        }
+        Plan {
+            mode: "full",
+            scenes: all_scenes,
+            variants,
+            duration: None,
+            dump_every: 30,
+            islands: 12,
+            pgs_sweeps: vec![1, 2, 5, 10, 20, 50, 100, 200, 500, 1000],
+            bpp_caps: vec![1, 2, 3, 5, 8, 13, 21, 35],
+            repeats: 3,
+            compliances: vec![1e-4, 1e-6, 1e-8, 1e-10, 1e-12],
+            mass_ratios: vec![1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9],
+            extreme_duration: 5.0,
+        }
+    }
+
+    /// Units of work for the progress bar: scene runs, island sets, extremes runs.
+    pub fn units(&self) -> u64 {
+        let runs = self.scenes.len() * (self.variants.len() + 1);
+        let islands = self.scenes.len();
+        let extremes = 2 * (self.compliances.len() + self.mass_ratios.len());
+        (runs + islands + extremes) as u64
+    }
+}
