@@ -122,3 +122,44 @@ fn broken_values_are_refused_with_the_field() {
     );
     assert_eq!(invalid_field(&scene_text("", &format!("{CABLE}\ndamping = [-1.0, 0.0]"))), "damping");
 }
+
+/// `sag`: the cable hangs from its chord on a parabola of that mid-span sag, in equal segments,
+/// its ends where the straight cable's are; a vertical chord or a sag beyond a quarter of the chord
+/// is refused.
+#[test]
+fn a_sagging_cable_hangs_on_its_parabola_in_equal_segments() {
+    let slant = "name = \"rope\"\nstart = [0, 0, 10]\ndirection = [0.6, 0, -0.8]\nlength = 6.0\nsegments = 30\n\
+                 diameter = 0.02\nmass = 3.0\nb = \"hook\"\nsag = 0.4";
+    let s = scene::load_str("t.toml", &scene_text("", slant)).unwrap();
+    let w = &s.world;
+    let (start, u) = (nalgebra::Vector3::new(0.0, 0.0, 10.0), nalgebra::Vector3::new(0.6, 0.0, -0.8));
+    let across = nalgebra::Vector3::new(-0.8, 0.0, -0.6); // −z across the chord
+    let point = |name: &str| w.joint_frames_world(w.joint_id(name).unwrap()).unwrap().anchor_a;
+    // Every joint on the parabola p(x) = start + x u + 4 s (x/C)(1 − x/C) n.
+    for i in 1..30 {
+        let p = point(&format!("rope/{i}"));
+        let x = (p - start).dot(&u);
+        let off = p - start - u * x;
+        let expect = 4.0 * 0.4 * (x / 6.0) * (1.0 - x / 6.0);
+        assert!((off - across * expect).norm() < 1e-9, "joint {i}: {off:?} vs {expect}");
+    }
+    assert!((point("rope/15") - start - u * 3.0 - across * 0.4).norm() < 1e-3, "mid-span sag");
+    assert!((point("rope/end") - (start + u * 6.0)).norm() < 1e-9, "the end stays at the chord's end");
+    let chords: Vec<f64> = (0..30)
+        .map(|i| {
+            let a = if i == 0 { start } else { point(&format!("rope/{i}")) };
+            let b = if i == 29 { point("rope/end") } else { point(&format!("rope/{}", i + 1)) };
+            (b - a).norm()
+        })
+        .collect();
+    let slack = chords.iter().sum::<f64>() - 6.0;
+    assert!(chords.iter().all(|c| (c - chords[0]).abs() < 1e-9), "unequal segments {chords:?}");
+    assert!((slack - 8.0 * 0.16 / 18.0).abs() < 0.1 * slack, "slack {slack} m vs 8 s² / (3 C)");
+    assert!(w.max_joint_error() < 1e-12, "built with a joint error");
+    // Refused: a sag on a vertical chord, beyond a quarter of the chord, below zero.
+    for sag in ["sag = 0.5", "sag = 1.6", "sag = -0.1"] {
+        let cable =
+            if sag == "sag = 0.5" { format!("{CABLE}\n{sag}") } else { slant.replace("sag = 0.4", sag) };
+        assert_eq!(invalid_field(&scene_text("", &cable)), "sag", "{sag}");
+    }
+}

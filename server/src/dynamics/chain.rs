@@ -9,6 +9,18 @@
 //! a load) by further ball joints. The segments' names are `"{name}/{i}"`, the joints'
 //! `"{name}/start"`, `"{name}/{i}"` and `"{name}/end"`.
 //!
+//! **Sagging chains** ([`ChainBuilder::sag`]). A rope drawn straight between two attachments has no
+//! slack: under its own weight it can only sag by stretching its rows, and it falls into that sag
+//! with a snap; if one end then moves closer (a crane's tip settling under its own weight by a few
+//! millimetres), the straight rope is a strut in compression, buckles and whips. With a sag `s > 0`
+//! the same chord `p₀ … p₀ + N ℓ u` is spanned by the parabola `p(x) = p₀ + x u + 4 s (x/C)(1 − x/C) n`
+//! (`C = N ℓ`, `n` the unit vector of `−z` across `u`: the rope hangs down from its chord), and the
+//! joints are put on it at `N` equal chords `ℓ' > ℓ` (found by bisection), the segments along them.
+//! A parabola is the equilibrium of a rope under a uniform load across its chord for the tension
+//! `T = w⊥ C² / (8 s)` (`w⊥` the weight per metre across the chord), so the rope starts at rest in
+//! (nearly) its hanging shape, with the slack `≈ 8 s² / (3 C)` to take up end motions. The segments
+//! keep their mass; their length is `ℓ'`. A vertical chord hangs straight: it takes no sag.
+//!
 //! **Mass properties.** Each segment has mass `m` and the inertia of a solid capsule of radius `r`
 //! around the segment axis ([`capsule_inertia`], cylinder `ℓ` long plus hemispherical caps: a
 //! rope's segments overlap at the joints) or of a box of square cross-section `2w × 2w × ℓ`
@@ -95,6 +107,7 @@ pub struct ChainBuilder {
     linear_damping: f64,
     angular_damping: f64,
     drum: Option<(JointId, f64)>,
+    sag: f64,
 }
 
 impl ChainBuilder {
@@ -122,6 +135,7 @@ impl ChainBuilder {
             linear_damping: 0.0,
             angular_damping: 0.0,
             drum: None,
+            sag: 0.0,
         }
     }
 
@@ -155,6 +169,13 @@ impl ChainBuilder {
     /// Attachment of the end point (default: free).
     pub fn attach_end(mut self, end: ChainEnd) -> Self {
         self.end = end;
+        self
+    }
+
+    /// Hang the chain from its chord with a mid-span sag `s` (m) below it (module doc); default 0
+    /// (straight). The chord must not be vertical, and `s ≤ C / 4`.
+    pub fn sag(mut self, s: f64) -> Self {
+        self.sag = s;
         self
     }
 
@@ -195,6 +216,7 @@ impl ChainBuilder {
             }
         }
         for (what, v) in [
+            ("sag", self.sag),
             ("compliance", self.compliance),
             ("linear damping", self.linear_damping),
             ("angular damping", self.angular_damping),
@@ -219,6 +241,9 @@ impl ChainBuilder {
         let far = self.count as f64 * self.segment_length;
         if self.count == 0 || !(self.start + self.direction * far).iter().all(|c| c.is_finite()) {
             return bad("count", self.count as f64);
+        }
+        if self.sag > 0.0 && (self.sag > far / 4.0 || sag_direction(&(self.direction / norm)).is_none()) {
+            return bad("sag", self.sag);
         }
         for end in [self.start_end, self.end] {
             if let ChainEnd::Body(b) = end
@@ -255,6 +280,69 @@ impl ChainBuilder {
     }
 }
 
+/// The unit vector of `−z` across the unit chord direction `u`; `None` for a vertical chord.
+fn sag_direction(u: &Vector3<f64>) -> Option<Vector3<f64>> {
+    let down = -Vector3::z();
+    let across = down - u * u.dot(&down);
+    (across.norm() > 1e-6).then(|| across.normalize())
+}
+
+/// The `N + 1` joint points of a chain from `start` along the unit `u`: straight (`sag = 0`), or
+/// on the parabola of mid-span sag `sag` below the chord `C = N ℓ` at `N` equal chords (module
+/// doc), with the chord length.
+fn chain_points(
+    start: Vector3<f64>,
+    u: Vector3<f64>,
+    l: f64,
+    n: usize,
+    sag: f64,
+) -> (Vec<Vector3<f64>>, f64) {
+    let c = n as f64 * l;
+    let straight = |i: usize| start + u * (i as f64 * l);
+    let Some(across) = sag_direction(&u).filter(|_| sag > 0.0) else {
+        return ((0..=n).map(straight).collect(), l);
+    };
+    let p = |x: f64| start + u * x + across * (4.0 * sag * (x / c) * (1.0 - x / c));
+    // March N chords of length `chord` along the parabola (extended past C if need be): the
+    // abscissa where the last one ends. The distance from p(x₀) grows with x, and p(x₀ + chord)
+    // is at least `chord` away, so each next point is bracketed in [x₀, x₀ + chord].
+    let march = |chord: f64, points: &mut Vec<Vector3<f64>>| -> f64 {
+        points.clear();
+        points.push(start);
+        let mut x = 0.0;
+        for _ in 0..n {
+            let from = p(x);
+            let (mut lo, mut hi) = (x, x + chord);
+            for _ in 0..80 {
+                let mid = 0.5 * (lo + hi);
+                if (p(mid) - from).norm() < chord {
+                    lo = mid;
+                } else {
+                    hi = mid;
+                }
+            }
+            x = 0.5 * (lo + hi);
+            points.push(p(x));
+        }
+        x
+    };
+    let mut points = Vec::with_capacity(n + 1);
+    // The arc is at most C + 2 · 4 sag (the chord plus twice the bulge): bisect the chord length.
+    let (mut lo, mut hi) = (l, (c + 8.0 * sag) / n as f64);
+    for _ in 0..80 {
+        let mid = 0.5 * (lo + hi);
+        if march(mid, &mut points) < c {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    let chord = 0.5 * (lo + hi);
+    march(chord, &mut points);
+    points[n] = straight(n);
+    (points, chord)
+}
+
 /// The items of a chain, in order from its start.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct Chain {
@@ -273,16 +361,19 @@ impl World {
     pub fn add_chain(&mut self, cb: ChainBuilder) -> Result<Chain, ChainError> {
         cb.validate(self)?;
         let u = cb.direction.normalize();
-        let l = cb.segment_length;
+        let (points, l) = chain_points(cb.start, u, cb.segment_length, cb.count, cb.sag);
         let inertia = match cb.shape {
             ChainShape::Capsule { radius } => capsule_inertia(cb.segment_mass, radius, l / 2.0),
             ChainShape::Box { half_width } => {
                 box_inertia(cb.segment_mass, Vector3::new(half_width, half_width, l / 2.0))
             }
         };
-        // Body z axis along u (a half turn about x when u points straight down).
-        let q = UnitQuaternion::rotation_between(&Vector3::z(), &u)
-            .unwrap_or_else(|| UnitQuaternion::from_axis_angle(&Vector3::x_axis(), std::f64::consts::PI));
+        // Body z axis along its chord (a half turn about x when it points straight down).
+        let axis = |i: usize| (points[i + 1] - points[i]).normalize();
+        let orientation = |d: &Vector3<f64>| {
+            UnitQuaternion::rotation_between(&Vector3::z(), d)
+                .unwrap_or_else(|| UnitQuaternion::from_axis_angle(&Vector3::x_axis(), std::f64::consts::PI))
+        };
         let mut chain = Chain {
             bodies: Vec::with_capacity(cb.count),
             joints: Vec::with_capacity(cb.count + 1),
@@ -290,8 +381,8 @@ impl World {
         };
         for i in 0..cb.count {
             let body = BodyBuilder::dynamic(&cb.segment_name(i), cb.segment_mass, inertia)
-                .position(cb.start + u * ((i as f64 + 0.5) * l))
-                .orientation(q)
+                .position((points[i] + points[i + 1]) / 2.0)
+                .orientation(orientation(&axis(i)))
                 .linear_damping(cb.linear_damping)
                 .angular_damping(cb.angular_damping);
             chain.bodies.push(self.add_body(body)?);
@@ -301,8 +392,8 @@ impl World {
             ChainEnd::World => Some(None),
             ChainEnd::Body(b) => Some(Some(b)),
         };
-        let ball = |name: String, a: BodyId, b: Option<BodyId>, at: f64| {
-            JointBuilder::at(&name, JointKind::Ball, a, b, cb.start + u * at, u).compliance(cb.compliance)
+        let ball = |name: String, a: BodyId, b: Option<BodyId>, at: usize| {
+            JointBuilder::at(&name, JointKind::Ball, a, b, points[at], u).compliance(cb.compliance)
         };
         if let Some((hinge, radius)) = cb.drum {
             let housing = self.joint(hinge).and_then(|j| j.body_b());
@@ -312,7 +403,7 @@ impl World {
                 chain.bodies[0],
                 housing,
                 cb.start,
-                -u,
+                -axis(0),
             )
             .compliance(cb.compliance)
             .limit(JointLimit::new(0.0, l));
@@ -326,21 +417,16 @@ impl World {
                 format!("{}/start", cb.name),
                 chain.bodies[0],
                 parent,
-                0.0,
+                0,
             ))?);
         }
         for i in 1..cb.count {
-            let j = ball(cb.segment_name(i), chain.bodies[i], Some(chain.bodies[i - 1]), i as f64 * l);
+            let j = ball(cb.segment_name(i), chain.bodies[i], Some(chain.bodies[i - 1]), i);
             chain.joints.push(self.add_joint(j)?);
         }
         if let Some(other) = attach(cb.end) {
             let last = chain.bodies[cb.count - 1];
-            chain.joints.push(self.add_joint(ball(
-                format!("{}/end", cb.name),
-                last,
-                other,
-                cb.count as f64 * l,
-            ))?);
+            chain.joints.push(self.add_joint(ball(format!("{}/end", cb.name), last, other, cb.count))?);
         }
         Ok(chain)
     }

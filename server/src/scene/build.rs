@@ -455,6 +455,18 @@ impl Builder<'_> {
                 "compliance",
                 d.compliance.unwrap_or(self.default_compliance),
             )?);
+        if let Some(sag) = d.sag {
+            let sag = self.non_negative(span, "sag", sag)?;
+            let chord = d.length;
+            if sag > chord / 4.0 || (sag > 0.0 && direction.cross(&Vector3::z()).norm() <= 1e-6) {
+                return Err(self.invalid(
+                    span,
+                    "sag",
+                    format!("a sag of {sag} m: at most a quarter of the chord, and none on a vertical cable"),
+                ));
+            }
+            cb = cb.sag(sag);
+        }
         if let Some([l, a]) = d.damping {
             cb = cb.damping(self.non_negative(span, "damping", l)?, self.non_negative(span, "damping", a)?);
         }

@@ -31,6 +31,10 @@ pub const BUILTIN: &[BuiltinScene] = &[
     scene!("winch", "a 400 kg drum winds a chain of 50 × 1 kg capsules dragged along the ground"),
     scene!("forklift", "a 3 t forklift lifts a crate on a pallet and turns 360° around a cone"),
     scene!("crane", "a 30 t mobile crane on outriggers hoists a 2 t concrete pipe on a 70 kg cable"),
+    scene!(
+        "offshore",
+        "a 50 t knuckle-boom crane on a floating 5,500 t ship drags a 15 t module on deck and lifts it"
+    ),
 ];
 
 /// The built-in scene `name`.

@@ -224,6 +224,7 @@ pub(crate) struct CableDef {
     pub mass: Option<f64>,
     pub a: Option<String>,
     pub b: Option<String>,
+    pub sag: Option<f64>,
     pub drum: Option<String>,
     pub drum_radius: Option<f64>,
     pub compliance: Option<f64>,
