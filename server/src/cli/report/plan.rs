@@ -52,7 +52,7 @@ impl Plan {
                 extreme_duration: 0.1,
             };
         }
-        let all_scenes = vec!["forklift", "winch", "forwarder", "crane"];
+        let all_scenes = vec!["forklift", "winch", "forwarder", "crane", "offshore"];
         let variants = vec![
             Variant::Full,
             Variant::Downdate,
