@@ -250,3 +250,36 @@ fn generated_contact_islands_converge_with_every_exact_variant() {
         }
     }
 }
+
+/// `auto` factors `L₀` only when its cost model first chooses deletions from it: a warm start that
+/// is the solution needs a pivot step or two (a friction update may follow), which refactors of
+/// `A_FF ⊕ I` serve without `L₀`, and the answer solves the problem (independent residual).
+#[test]
+fn auto_factors_l0_only_when_it_deletes_from_it() {
+    let mut checked = 0;
+    for seed in 0..12 {
+        let mut p = pivotsim_server::solver::generate::contact_like(200, seed, 1e3);
+        let (lam, _) = solve(&p, Variant::Skyline, 1000);
+        let mut s =
+            Solver::new(SolverOptions { variant: Variant::Skyline, max_steps: 1000, ..Default::default() });
+        let mut l = vec![0.0; p.n()];
+        s.solve(&p, &mut l);
+        let index = s.index_set().to_vec();
+        if !index.iter().any(|s| s.is_tight()) {
+            continue;
+        }
+        p.set_warm_start(Some(&lam), Some(&index)).expect("warm start");
+        let (warm, st) = solve(&p, Variant::Auto, 35);
+        assert_eq!(st.status, SolveStatus::Converged, "seed {seed}");
+        assert!(st.pivot_steps <= 2, "seed {seed}: {} steps from the solution", st.pivot_steps);
+        assert_eq!(st.auto_choices[0], 0, "seed {seed}: {:?}: deleted from L0", st.auto_choices);
+        assert!(!st.l0_factored, "seed {seed}: L0 factored though never used");
+        assert!(st.auto_choices[2] >= 1, "seed {seed}: {:?}", st.auto_choices);
+        // Friction makes the solution non-unique in general: judged by its own residual.
+        let mut w = vec![0.0; p.n()];
+        let (_, rr) = p.natural_residual(&warm, &mut w);
+        assert!(rr <= 1e-9, "seed {seed}: residual {rr:e}");
+        checked += 1;
+    }
+    assert!(checked >= 6, "only {checked} problems had tight rows");
+}

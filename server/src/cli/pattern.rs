@@ -117,7 +117,15 @@ fn draw_matrix(
     let g = m.div_ceil(block).max(1);
     // The strongest colour seen per block, by rank: 0 none, then shade < blue < red.
     let mut grid: Vec<(u8, RGBColor)> = vec![(0, WHITE); g * g];
-    let rank = |c: &RGBColor| if *c == RED { 3 } else if *c == BLUE { 2 } else { 1 };
+    let rank = |c: &RGBColor| {
+        if *c == RED {
+            3
+        } else if *c == BLUE {
+            2
+        } else {
+            1
+        }
+    };
     let mut mark = |i: usize, j: usize, color: &RGBColor| -> anyhow::Result<()> {
         let cell = &mut grid[(i / block) * g + j / block];
         let r = rank(color);

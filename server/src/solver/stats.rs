@@ -108,6 +108,9 @@ pub struct SolveStats {
     pub deletions: usize,
     /// How `auto` chose, per strategy: [deletions from L₀, deletions from previous, incremental].
     pub auto_choices: [usize; 3],
+    /// `L₀ = chol(A)` was factored (`skyline` always; `auto` only when it first deletes from it or
+    /// solves with no tight row).
+    pub l0_factored: bool,
     /// Natural-map residual `‖r‖∞` against the true bounds.
     pub residual: f64,
     /// `‖r‖∞ / ‖λ‖∞`.

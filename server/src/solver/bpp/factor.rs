@@ -29,11 +29,19 @@ impl Solver {
                 let len = self.env.len();
                 self.stats.factor_entries = len;
                 resize(&mut self.l, len);
+                self.l0_valid = false;
                 if matches!(variant, Variant::Skyline | Variant::Auto) {
                     resize(&mut self.l0, len);
+                }
+                // `auto` factors `L₀` only when its cost model first wants it (`ensure_l0`): a
+                // warm-started solve often never does, and its factor cost a whole refactor.
+                if variant == Variant::Skyline {
+                    // Timed by the caller, with the rest of the preparation.
                     self.tmp_tight_clear();
                     self.stats.regularized +=
                         self.env.factor_from(&self.ap, &self.tmp_tight, &mut self.l0, 0, self.max_diag);
+                    self.l0_valid = true;
+                    self.stats.l0_factored = true;
                 }
             }
             Variant::Pgs => {}
@@ -42,6 +50,20 @@ impl Solver {
             let n = if variant == Variant::Downdate { m * m } else { self.env.len() };
             resize(&mut self.lref, n);
         }
+    }
+
+    /// Factors `L₀ = chol(A)` on the envelope unless it is already there.
+    pub(super) fn ensure_l0(&mut self) {
+        if self.l0_valid {
+            return;
+        }
+        let t = Instant::now();
+        self.tmp_tight_clear();
+        self.stats.regularized +=
+            self.env.factor_from(&self.ap, &self.tmp_tight, &mut self.l0, 0, self.max_diag);
+        self.l0_valid = true;
+        self.stats.l0_factored = true;
+        self.stats.factor_us += us(t);
     }
 
     pub(super) fn tmp_tight_clear(&mut self) {
@@ -172,20 +194,23 @@ impl Solver {
     fn auto_factor(&mut self, any_tight: bool) -> FactorIn {
         let m = self.ap.n();
         if !any_tight {
+            self.ensure_l0();
             return FactorIn::L0;
         }
         if self.l_valid && self.tight == self.tight_l {
             return FactorIn::L;
         }
         let (wd, wc, wf) = self.opts.auto_weights;
+        let l0_cost = if self.l0_valid { 0.0 } else { wf * self.env.cost_factor_from(0) };
         let end = self.free_end();
         // (a) deletions from L₀.
         let tmin = self.tight.iter().position(|&t| t).unwrap_or(m);
         let del_all: f64 =
             (0..m).filter(|&i| self.tight[i]).map(|i| self.env.cost_delete_before(i, end)).sum();
         let lmin = if self.l_valid { self.tight_l.iter().position(|&t| t).unwrap_or(m) } else { 0 };
-        let cost_a =
-            wc * self.env.cost_copy_from(self.env.first_column_of_row(tmin.min(lmin))) + wd * del_all;
+        let cost_a = l0_cost
+            + wc * self.env.cost_copy_from(self.env.first_column_of_row(tmin.min(lmin)))
+            + wd * del_all;
         // (b) further deletions from the current factor, when T only grew.
         let grew = self.l_valid && (0..m).all(|i| !self.tight_l[i] || self.tight[i]);
         let cost_b = if grew {
@@ -230,6 +255,7 @@ impl Solver {
     }
 
     pub(super) fn delete_from_l0(&mut self) {
+        self.ensure_l0();
         let m = self.ap.n();
         let t = Instant::now();
         let tmin = self.tight.iter().position(|&t| t).unwrap_or(m);
@@ -362,6 +388,9 @@ impl Solver {
         let which = match self.kernel {
             Variant::Full => FactorIn::Compact,
             Variant::Downdate | Variant::Skyline | Variant::Auto if !self.tight.iter().any(|&t| t) => {
+                if self.kernel == Variant::Auto {
+                    self.ensure_l0();
+                }
                 FactorIn::L0
             }
             _ => FactorIn::L,
