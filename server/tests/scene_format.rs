@@ -345,3 +345,13 @@ fn the_joint_error_excludes_a_prismatic_slide() {
     // What remains is the compliant sag under gravity: c m g ≈ 1e-10 · 49 N per row.
     assert!(w.max_joint_error() < 1e-7, "{}", w.max_joint_error());
 }
+
+#[test]
+fn pgs_sweeps_caps_the_projected_gauss_seidel_sweeps() {
+    let w = load("[scene]\nname = \"t\"\nvariant = \"pgs\"\npgs_sweeps = 3\n").world;
+    assert_eq!(w.settings().solver.pgs.max_iterations, 3);
+    let default = load(HEADER).world;
+    assert_eq!(default.settings().solver.pgs.max_iterations, 100);
+    let e = load_err("[scene]\nname = \"t\"\npgs_sweeps = 0\n").to_string();
+    assert!(e.contains("pgs_sweeps") && e.contains("≥ 1"), "{e}");
+}

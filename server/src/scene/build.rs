@@ -659,6 +659,12 @@ impl<'a> Builder<'a> {
         if let Some(n) = sec.polish_sweeps {
             settings.solver.polish_sweeps = n;
         }
+        if let Some(n) = sec.pgs_sweeps {
+            if n == 0 {
+                return Err(self.invalid(sspan, "pgs_sweeps", "must be ≥ 1"));
+            }
+            settings.solver.pgs.max_iterations = n;
+        }
         if let Some(n) = sec.projection_iterations {
             settings.projection_iterations = n;
         }

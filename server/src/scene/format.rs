@@ -56,6 +56,7 @@ pub(crate) struct SceneSection {
     pub safeguard_after_update: Option<bool>,
     pub murty_after: Option<usize>,
     pub polish_sweeps: Option<usize>,
+    pub pgs_sweeps: Option<usize>,
     pub projection_iterations: Option<usize>,
     pub warm_start: Option<bool>,
     pub gyroscopic: Option<bool>,

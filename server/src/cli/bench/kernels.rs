@@ -130,6 +130,26 @@ pub fn envelope_kernel(name: &str, a: &SymCsr, plan: &Plan, seed: u64) -> Envelo
     }
 }
 
+/// The paper's Fig. 4 on an envelope (skyline) matrix: copy of `L₀` plus deletions against the
+/// envelope refactor with the same tight rows, at each tight percentage of `fracs` (each averaged
+/// over `sets` random tight sets; timings of `tu` µs samples, best of `reps`).
+pub fn envelope_fig4(
+    a: &SymCsr,
+    fracs: &[f64],
+    tu: f64,
+    reps: usize,
+    sets: usize,
+    seed: u64,
+) -> Vec<SweepPoint> {
+    let m = a.n();
+    let mut b = EnvelopeBench::new(a, tu, reps);
+    let counts: Vec<usize> = fracs
+        .iter()
+        .map(|f| ((f * m as f64 / 100.0).round() as usize).clamp(1, m.saturating_sub(1).max(1)))
+        .collect();
+    b.sweep_counts(sets, &counts, seed)
+}
+
 /// One matrix in RCM order with its envelope, its factor `L₀` and the scratch the timed envelope
 /// kernels work in.
 struct EnvelopeBench {
@@ -203,6 +223,12 @@ impl EnvelopeBench {
     /// Copy + deletions against a masked refactor for every tight count up to `t_max`, each averaged
     /// over `sets` random nested tight sets drawn from `seed`.
     fn sweep(&mut self, sets: usize, t_max: usize, seed: u64) -> Vec<SweepPoint> {
+        let counts: Vec<usize> = (1..=t_max.min(self.m.saturating_sub(1))).collect();
+        self.sweep_counts(sets, &counts, seed)
+    }
+
+    /// [`Self::sweep`] at the given tight counts.
+    fn sweep_counts(&mut self, sets: usize, counts: &[usize], seed: u64) -> Vec<SweepPoint> {
         let m = self.m;
         // Deletion cost depends on the position (the sweep runs to the end of the connected block),
         // so every tight count is averaged over several random nested tight sets.
@@ -215,7 +241,7 @@ impl EnvelopeBench {
             })
             .collect();
         let mut sweep = Vec::new();
-        for t in 1..=t_max.min(m.saturating_sub(1)) {
+        for &t in counts {
             let (mut downdate_us, mut refactor_us) = (0.0, 0.0);
             for order in &orders {
                 let mut set = order[..t].to_vec();

@@ -52,9 +52,8 @@ use pivotsim_server::solver::{Mlcp, Variant, io};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 
-use kernels::{
-    DenseKernel, EnvelopeKernel, Fig4, dense_kernel, dense_sweep, envelope_kernel, random_spd, warm_up,
-};
+use kernels::{DenseKernel, EnvelopeKernel, Fig4, dense_kernel, envelope_kernel};
+pub use kernels::{SweepPoint, dense_sweep, envelope_fig4, random_spd, warm_up};
 use plan::{LONG_STEPS, Plan, SHORT_STEPS};
 use plots::{plot_fig4, plot_solve_times};
 use problems::{ProblemResult, run_problem};

@@ -1,11 +1,11 @@
 //! Stage 4, the extremes: the winch over the compliance of its joints and contacts, and the crane
 //! over the mass ratio of its load (pipe mass / lightest body, a cable segment of 1.75 kg), each
-//! with block pivoting (`auto`, cap 35) and with projected Gauss–Seidel (its default 100 sweeps):
-//! where each method holds and where it breaks.
+//! with block pivoting (`auto`, cap 35; in the full report also `skyline` and `full`, which must agree
+//! with it) and with projected Gauss–Seidel (its default 100 sweeps): where each method holds and
+//! where it breaks.
 
 use indicatif::ProgressBar;
 use pivotsim_server::scene::SceneOverride;
-use pivotsim_server::solver::Variant;
 use serde::Serialize;
 
 use super::Plan;
@@ -71,7 +71,7 @@ fn sweep_point(
 ) -> anyhow::Result<Vec<ExtremePoint>> {
     let set: Vec<SceneOverride> = set.iter().map(|s| s.parse()).collect::<Result<_, _>>()?;
     let mut out = Vec::new();
-    for v in [Variant::Auto, Variant::Pgs] {
+    for &v in &plan.extreme_variants {
         pb.set_message(format!("extremes: {scene} at {x:.0e}, {}", v.name()));
         // A run that fails (the world refuses a step) broke there: recorded, not fatal.
         let Ok((s, _)) = run_one(scene, v, plan, &set, None) else {

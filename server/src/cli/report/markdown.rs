@@ -62,8 +62,10 @@ pub fn readme(r: &Report) -> String {
     table2(&mut w, r);
     table3(&mut w, r);
     table4(&mut w, r);
+    fig4(&mut w, r);
     figures(&mut w, r);
     trade(&mut w, r);
+    equal_time(&mut w, r);
     warm_start(&mut w, r);
     extremes(&mut w, r);
     missing(&mut w);
@@ -232,6 +234,10 @@ fn figures(w: &mut String, r: &Report) {
             "Fig. 7: solve time per step, every variant"
         } else if f.starts_with("trade") {
             "the trade: relative residual against time on the dumped islands"
+        } else if f.starts_with("fig4") {
+            "Fig. 4: speed-up of deletion over refactor against matrix size, per tight percentage"
+        } else if f.starts_with("equal_time") {
+            "equal time: the payload's path with `auto` and with PGS at the same solve time per step"
         } else if f.starts_with("extremes") {
             "the extremes: joint error where each method holds and where it breaks"
         } else {
@@ -308,7 +314,8 @@ fn extremes(w: &mut String, r: &Report) {
         w,
         "The winch over the compliance of its joints and contacts, and the crane over its load's mass \
          ratio (pipe mass over its lightest body, a 1.75 kg cable segment), with block pivoting (`auto`, \
-         cap 35) and projected Gauss–Seidel (100 sweeps). Plotted in `extremes_*.svg`.\n"
+         cap 35; the full report adds `skyline` and `full`) and projected Gauss–Seidel (100 sweeps). \
+         Plotted in `extremes_*.svg`.\n"
     );
     for (title, pts) in [
         ("winch, compliance", &r.extremes.winch_compliance),
@@ -345,12 +352,88 @@ fn row(w: &mut String, p: &ExtremePoint) {
 
 fn missing(w: &mut String) {
     let _ = writeln!(w, "## Not yet in this report\n");
+    let _ =
+        writeln!(w, "- the vehicle scene (not yet built);\n- rapier (`rapier3d-f64`) on the same rigs.\n");
+}
+
+fn fig4(w: &mut String, r: &Report) {
+    let _ = writeln!(w, "## Fig. 4: deletion against refactor\n");
     let _ = writeln!(
         w,
-        "- the vehicle scene (not yet built);\n- rapier (`rapier3d-f64`) on the same rigs;\n\
-         - PGS against block pivoting in the running simulation at equal time per step;\n\
-         - Fig. 4 (deletion against refactor by size and tight fraction): `pivotsim-server bench-solver` draws it."
+        "Speed-up of (copy of `L₀` + deleting the tight rows) over refactoring with the same tight rows, \
+         by matrix size and tight percentage: on random dense SPD matrices (the paper's Fig. 4: dense \
+         deletions against a dense Cholesky of the compact `A_FF`) and on banded contact-like matrices \
+         of the same size (crane-shaped, reverse Cuthill–McKee: envelope deletions against the envelope \
+         refactor, `skyline` against `skyline-refactor`). Above 1 deletion wins. Plotted in \
+         `fig4_dense.svg` and `fig4_envelope.svg`.\n"
     );
+    let _ = write!(w, "| matrix | m |");
+    for t in &r.fig4.tight_pct {
+        let _ = write!(w, " {t:.0} % |");
+    }
+    let _ = writeln!(w, "\n|---|---|{}", "---|".repeat(r.fig4.tight_pct.len()));
+    for (label, sizes) in [("dense SPD", &r.fig4.dense), ("contact-like, envelope", &r.fig4.envelope)] {
+        for s in sizes {
+            let _ = write!(w, "| {label} | {} |", s.m);
+            for p in &s.points {
+                let _ = write!(w, " {:.2}× |", p.speedup);
+            }
+            w.push('\n');
+        }
+    }
+    w.push('\n');
+}
+
+fn equal_time(w: &mut String, r: &Report) {
+    let _ = writeln!(w, "## The trade in simulation: PGS at equal time per step\n");
+    let _ = writeln!(
+        w,
+        "Each scene with `auto` and with projected Gauss–Seidel, first with its default 100 sweeps, then \
+         with its sweep cap scaled to take `auto`'s mean solve time per step. Joint error, the deepest \
+         penetration of a loaded contact (compliant sink included), the payload's displacement and lift \
+         at the end, and how far PGS's payload ends from `auto`'s. Plotted in `equal_time_payload.svg`.\n"
+    );
+    let _ = writeln!(
+        w,
+        "| scene | payload | method | mean solve (µs) | joint error (m) | penetration (m) | max residual | moved (m) | lift (m) | stable |"
+    );
+    let _ = writeln!(w, "|---|---|---|---|---|---|---|---|---|---|");
+    for e in &r.equal_time {
+        for (k, x) in [&e.auto, &e.pgs_default, &e.pgs_equal].into_iter().enumerate() {
+            let _ = writeln!(
+                w,
+                "| {} | {} | {} | {:.0} | {:.1e} | {:.1e} | {:.1e} | {} | {} | {} |",
+                if k == 0 { e.scene.as_str() } else { "" },
+                if k == 0 { e.payload.as_str() } else { "" },
+                x.method,
+                x.mean_solve_us,
+                x.max_joint_error_m,
+                x.max_penetration_m,
+                x.max_residual_rel,
+                metres(x.payload_moved_m),
+                metres(x.payload_lift_m),
+                x.stable
+            );
+        }
+    }
+    let _ = writeln!(w, "\nWhere PGS at equal time leaves the payload, against `auto`:\n");
+    for e in &r.equal_time {
+        let _ = writeln!(
+            w,
+            "- {}: {} sweeps per solve; the payload ends {} m from `auto`'s; joint error {:.1e} m against {:.1e} m.",
+            e.scene,
+            e.pgs_sweeps,
+            metres(e.payload_gap_m),
+            e.pgs_equal.max_joint_error_m,
+            e.auto.max_joint_error_m
+        );
+    }
+    w.push('\n');
+}
+
+/// A length in m: three decimals where that is readable, scientific beyond.
+fn metres(x: f64) -> String {
+    if x.abs() < 1e3 { format!("{x:.3}") } else { format!("{x:.1e}") }
 }
 
 fn sci(x: Option<f64>) -> String {

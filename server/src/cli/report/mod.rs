@@ -16,7 +16,11 @@
 //!    of stage 1.
 //! 4. **Extremes** (`extremes.rs`): the winch over compliance 1e-4…1e-12 and the crane over the mass
 //!    ratio of its load 1e2…1e9, with `auto` and with PGS: stable or not, drift, residual.
-//! 5. `README.md` (tables, links to the figures), `report.json` (every number), `steps.csv` (the
+//! 5. **Fig. 4** (`fig4.rs`): deletion against refactor over matrix size and tight fraction, dense
+//!    and on the envelope.
+//! 6. **Equal time** (`equal_time.rs`): each scene with PGS given `auto`'s solve time per step —
+//!    joint error, penetration, where the payload ends.
+//! 7. `README.md` (tables, links to the figures), `report.json` (every number), `steps.csv` (the
 //!    per-step series) and the SVG figures in the output directory.
 //!
 //! | file | what |
@@ -25,10 +29,14 @@
 //! | `scenes.rs` | stages 1 and 3 |
 //! | `islands.rs` | stage 2 |
 //! | `extremes.rs` | stage 4 |
+//! | `fig4.rs` | stage 5 |
+//! | `equal_time.rs` | stage 6 |
 //! | `markdown.rs` | `README.md` |
 //! | `plots.rs` | the figures |
 
+mod equal_time;
 mod extremes;
+mod fig4;
 mod islands;
 mod markdown;
 mod plan;
@@ -85,6 +93,10 @@ pub struct Report {
     pub islands: Vec<islands::IslandsResult>,
     /// Stage 4.
     pub extremes: extremes::Extremes,
+    /// Stage 5.
+    pub fig4: fig4::Fig4,
+    /// Stage 6, per scene.
+    pub equal_time: Vec<equal_time::EqualTime>,
     /// The figures written (file names in the output directory).
     pub figures: Vec<String>,
 }
@@ -102,8 +114,10 @@ pub fn run(cfg: &ReportConfig) -> anyhow::Result<Report> {
     let islands = islands::run(&plan, &cfg.out, &scenes, &pb)?;
     let _ = std::fs::remove_dir_all(&dumps);
     let extremes = extremes::run(&plan, &pb)?;
+    let fig4 = fig4::run(&plan, &pb);
+    let equal_time = equal_time::run(&plan, &pb)?;
     pb.finish_and_clear();
-    let mut report = Report { machine, scenes, islands, extremes, figures: Vec::new() };
+    let mut report = Report { machine, scenes, islands, extremes, fig4, equal_time, figures: Vec::new() };
     report.figures = plots::write_all(&cfg.out, &report)?;
     report.machine.wall_s = t0.elapsed().as_secs_f64();
     write_outputs(&cfg.out, &report)?;
@@ -181,13 +195,17 @@ mod tests {
         let r = run(&cfg).expect("report");
         // The files appear and parse; the numbers are the report's business, not this test's.
         let md = std::fs::read_to_string(dir.join("README.md")).expect("README.md");
-        for heading in ["Table 2", "Table 3", "Table 4", "trade", "Warm start", "Extremes"] {
+        for heading in
+            ["Table 2", "Table 3", "Table 4", "Fig. 4", "trade", "equal time", "Warm start", "Extremes"]
+        {
             assert!(md.contains(heading), "README.md lacks {heading}");
         }
         let json: serde_json::Value =
             serde_json::from_str(&std::fs::read_to_string(dir.join("report.json")).expect("json"))
                 .expect("parse");
         assert!(json["scenes"].as_array().is_some_and(|s| !s.is_empty()));
+        assert!(json["equal_time"].as_array().is_some_and(|s| !s.is_empty()));
+        assert!(json["fig4"]["dense"].as_array().is_some_and(|s| !s.is_empty()));
         let mut rd = csv::Reader::from_path(dir.join("steps.csv")).expect("csv");
         assert!(rd.records().count() > 0);
         assert!(!r.figures.is_empty());

@@ -31,6 +31,14 @@ pub struct Plan {
     pub mass_ratios: Vec<f64>,
     /// Simulated seconds of each extremes run.
     pub extreme_duration: f64,
+    /// Methods of the extremes sweeps.
+    pub extreme_variants: Vec<Variant>,
+    /// Matrix sizes of Fig. 4.
+    pub fig4_sizes: Vec<usize>,
+    /// Tight percentages of Fig. 4.
+    pub fig4_fracs: Vec<f64>,
+    /// Target µs of one timing sample of Fig. 4.
+    pub fig4_target_us: f64,
 }
 
 impl Plan {
@@ -50,6 +58,10 @@ impl Plan {
                 compliances: vec![1e-8],
                 mass_ratios: vec![1e3],
                 extreme_duration: 0.1,
+                extreme_variants: vec![Variant::Auto, Variant::Pgs],
+                fig4_sizes: vec![20],
+                fig4_fracs: vec![10.0, 50.0],
+                fig4_target_us: 20.0,
             };
         }
         let all_scenes = vec!["forklift", "winch", "forwarder", "crane", "offshore"];
@@ -75,6 +87,10 @@ impl Plan {
                 compliances: vec![1e-6, 1e-10, 1e-12],
                 mass_ratios: vec![1e2, 1e5, 1e9],
                 extreme_duration: 2.0,
+                extreme_variants: vec![Variant::Auto, Variant::Pgs],
+                fig4_sizes: vec![50, 200],
+                fig4_fracs: vec![5.0, 20.0, 50.0],
+                fig4_target_us: 300.0,
             };
         }
         Plan {
@@ -90,14 +106,19 @@ impl Plan {
             compliances: vec![1e-4, 1e-6, 1e-8, 1e-10, 1e-12],
             mass_ratios: vec![1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9],
             extreme_duration: 5.0,
+            extreme_variants: vec![Variant::Auto, Variant::Skyline, Variant::Full, Variant::Pgs],
+            fig4_sizes: vec![50, 100, 200, 430, 700],
+            fig4_fracs: vec![1.0, 5.0, 10.0, 20.0, 30.0, 50.0],
+            fig4_target_us: 1_000.0,
         }
     }
 
-    /// Units of work for the progress bar: scene runs, island sets, extremes runs.
+    /// Units of work for the progress bar: scene runs, island sets, extremes runs, Fig. 4 sizes,
+    /// equal-time scenes.
     pub fn units(&self) -> u64 {
         let runs = self.scenes.len() * (self.variants.len() + 1);
         let islands = self.scenes.len();
-        let extremes = 2 * (self.compliances.len() + self.mass_ratios.len());
-        (runs + islands + extremes) as u64
+        let extremes = self.extreme_variants.len() * (self.compliances.len() + self.mass_ratios.len());
+        (runs + islands + extremes + self.fig4_sizes.len() + self.scenes.len()) as u64
     }
 }

@@ -115,6 +115,50 @@ pub fn write_all(out: &Path, r: &Report) -> anyhow::Result<Vec<String>> {
         let (series, marks) = extreme_series(pts);
         add(name.into(), title, x, "log10(joint error, m)", series, marks)?;
     }
+    // Fig. 4: speed-up over size, one line per tight percentage.
+    for (name, title, sizes) in [
+        ("fig4_dense.svg", "Fig. 4, dense SPD: deletions over refactor of A_FF", &r.fig4.dense),
+        (
+            "fig4_envelope.svg",
+            "Fig. 4, contact-like on the envelope: deletions over envelope refactor",
+            &r.fig4.envelope,
+        ),
+    ] {
+        let series = r
+            .fig4
+            .tight_pct
+            .iter()
+            .enumerate()
+            .map(|(k, t)| Series {
+                name: format!("{t:.0} % tight"),
+                points: sizes
+                    .iter()
+                    .filter_map(|s| s.points.get(k).map(|p| (s.m as f64, p.speedup)))
+                    .collect(),
+            })
+            .collect();
+        add(name.into(), title, "rows m", "speed-up (refactor time / deletion time)", series, vec![])?;
+    }
+    // Equal time: payload displacement, auto and PGS at auto's time.
+    let h = 1.0 / 60.0;
+    let series = r
+        .equal_time
+        .iter()
+        .flat_map(|e| {
+            [&e.auto, &e.pgs_equal].map(|x| Series {
+                name: format!("{}: {}", e.scene, x.method),
+                points: x.payload_series.iter().enumerate().map(|(k, d)| ((k + 1) as f64 * h, *d)).collect(),
+            })
+        })
+        .collect();
+    add(
+        "equal_time_payload.svg".into(),
+        "Payload displacement from its start: auto and PGS at equal solve time",
+        "time (s)",
+        "displacement (m)",
+        series,
+        vec![],
+    )?;
     for i in &r.islands {
         if let Some(f) = &i.sparsity_figure {
             names.push(f.clone());
