@@ -659,6 +659,9 @@ impl<'a> Builder<'a> {
         if let Some(n) = sec.polish_sweeps {
             settings.solver.polish_sweeps = n;
         }
+        if let Some(b) = sec.exact_bilateral {
+            settings.solver.exact_bilateral = b;
+        }
         if let Some(n) = sec.pgs_sweeps {
             if n == 0 {
                 return Err(self.invalid(sspan, "pgs_sweeps", "must be ≥ 1"));

@@ -57,6 +57,7 @@ pub(crate) struct SceneSection {
     pub murty_after: Option<usize>,
     pub polish_sweeps: Option<usize>,
     pub pgs_sweeps: Option<usize>,
+    pub exact_bilateral: Option<bool>,
     pub projection_iterations: Option<usize>,
     pub warm_start: Option<bool>,
     pub gyroscopic: Option<bool>,

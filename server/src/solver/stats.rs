@@ -84,6 +84,9 @@ pub struct SolveStats {
     /// Projected Gauss–Seidel sweeps that polished the answer of a solve that did not converge
     /// (0: none, or the polish did not lower the residual and was dropped).
     pub polish_sweeps: usize,
+    /// A solve that did not converge had its bilateral rows solved exactly for its contact impulses
+    /// (`SolverOptions::exact_bilateral`); the contact impulses were scaled by this factor (1: not).
+    pub bilateral_scale: Option<f64>,
     /// Murty single-pivot steps taken.
     pub murty_steps: usize,
     /// Steps of the semismooth Newton fallback (stalled outer friction iteration).
