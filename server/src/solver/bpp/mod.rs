@@ -208,7 +208,7 @@ pub struct SolverOptions {
     pub polish_above: f64,
     /// The answer of a solve that did not converge gets its bilateral rows (joints: unbounded, no
     /// friction index) solved exactly for its contact impulses, those scaled toward zero only as
-    /// far as the merit needs (`safe.rs`, [`Solver::exact_bilateral`]).
+    /// far as the merit needs (`safe.rs`).
     pub exact_bilateral: bool,
     /// Relative weights of the `auto` cost model: (deleted entry, copied entry, factor multiply–add);
     /// measured on this machine (m = 430, bandwidth 28): 3.0, 0.16 and 1.4 ns per unit.
@@ -332,7 +332,7 @@ pub struct Solver {
     zero_feasible: bool,
     /// The candidate a polish started from (`safe.rs`).
     polish_save: Vec<f64>,
-    /// Scratch of [`Solver::exact_bilateral`]: the pivoting's tight set, the step `d` and `A d`.
+    /// Scratch of `exact_bilateral` (`safe.rs`): the pivoting's tight set, the step `d` and `A d`.
     bil_tight: Vec<bool>,
     bil_d: Vec<f64>,
     bil_ad: Vec<f64>,
