@@ -20,7 +20,14 @@ pub struct SceneRun {
 /// Runs built-in scene `name` for `duration` seconds (default: its own) with `variant` through
 /// the runner (so that the summary is the CLI's), recording every body's position after every step.
 pub fn run_builtin(name: &str, variant: Variant, duration: Option<f64>) -> SceneRun {
-    let mut sc = scene::load(name).unwrap_or_else(|e| panic!("{name}: {e}"));
+    run_builtin_with(name, variant, duration, &[])
+}
+
+/// [`run_builtin`] with scene overrides (`KEY=VALUE`, scenes/README.md).
+#[allow(dead_code)]
+pub fn run_builtin_with(name: &str, variant: Variant, duration: Option<f64>, set: &[&str]) -> SceneRun {
+    let set: Vec<_> = set.iter().map(|kv| kv.parse().expect("override")).collect();
+    let mut sc = scene::load_with(name, &set).unwrap_or_else(|e| panic!("{name}: {e}"));
     let opts = RunOptions { duration, variant: Some(variant), every: 1, ..RunOptions::default() };
     let mut positions = Vec::new();
     let summary = run_scene_observed(&mut sc, &opts, |w| {
