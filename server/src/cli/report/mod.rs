@@ -16,7 +16,11 @@
 //!    of stage 1.
 //! 4. **Extremes** (`extremes.rs`): the winch over compliance 1e-4…1e-12 and the crane over the mass
 //!    ratio of its load 1e2…1e9, with `auto` and with PGS: stable or not, drift, residual.
-//! 5. `README.md` (tables, links to the figures), `report.json` (every number), `steps.csv` (the
+//! 5. **rapier** (`rapier.rs`, built with the `rapier` feature): rapier and pivotsim on three rigs
+//!    built from one description — a heavy load on a light chain, a stack of alternating masses, a
+//!    vehicle body on a hinged arm — over the mass ratio 1e1…1e9: joint drift, penetration, energy,
+//!    time per step, and where each engine breaks.
+//! 6. `README.md` (tables, links to the figures), `report.json` (every number), `steps.csv` (the
 //!    per-step series) and the SVG figures in the output directory.
 //!
 //! | file | what |
@@ -25,6 +29,7 @@
 //! | `scenes.rs` | stages 1 and 3 |
 //! | `islands.rs` | stage 2 |
 //! | `extremes.rs` | stage 4 |
+//! | `rapier.rs` | stage 5: the comparison with rapier (feature `rapier`) |
 //! | `markdown.rs` | `README.md` |
 //! | `plots.rs` | the figures |
 
@@ -33,6 +38,7 @@ mod islands;
 mod markdown;
 mod plan;
 mod plots;
+mod rapier;
 mod scenes;
 
 use std::path::{Path, PathBuf};
@@ -85,6 +91,8 @@ pub struct Report {
     pub islands: Vec<islands::IslandsResult>,
     /// Stage 4.
     pub extremes: extremes::Extremes,
+    /// Stage 5 (`None`: built without the `rapier` feature).
+    pub rapier: Option<rapier::RapierComparison>,
     /// The figures written (file names in the output directory).
     pub figures: Vec<String>,
 }
@@ -102,8 +110,12 @@ pub fn run(cfg: &ReportConfig) -> anyhow::Result<Report> {
     let islands = islands::run(&plan, &cfg.out, &scenes, &pb)?;
     let _ = std::fs::remove_dir_all(&dumps);
     let extremes = extremes::run(&plan, &pb)?;
+    #[cfg(feature = "rapier")]
+    let rapier = Some(rapier::run(&plan, &pb)?);
+    #[cfg(not(feature = "rapier"))]
+    let rapier = None;
     pb.finish_and_clear();
-    let mut report = Report { machine, scenes, islands, extremes, figures: Vec::new() };
+    let mut report = Report { machine, scenes, islands, extremes, rapier, figures: Vec::new() };
     report.figures = plots::write_all(&cfg.out, &report)?;
     report.machine.wall_s = t0.elapsed().as_secs_f64();
     write_outputs(&cfg.out, &report)?;
@@ -181,13 +193,16 @@ mod tests {
         let r = run(&cfg).expect("report");
         // The files appear and parse; the numbers are the report's business, not this test's.
         let md = std::fs::read_to_string(dir.join("README.md")).expect("README.md");
-        for heading in ["Table 2", "Table 3", "Table 4", "trade", "Warm start", "Extremes"] {
+        for heading in ["Table 2", "Table 3", "Table 4", "trade", "Warm start", "Extremes", "## rapier"] {
             assert!(md.contains(heading), "README.md lacks {heading}");
         }
         let json: serde_json::Value =
             serde_json::from_str(&std::fs::read_to_string(dir.join("report.json")).expect("json"))
                 .expect("parse");
         assert!(json["scenes"].as_array().is_some_and(|s| !s.is_empty()));
+        // The comparison is there exactly when it is built in.
+        assert_eq!(json["rapier"]["points"].as_array().is_some_and(|p| !p.is_empty()), rapier::BUILT);
+        assert_eq!(md.to_lowercase().contains("where each engine breaks"), rapier::BUILT);
         let mut rd = csv::Reader::from_path(dir.join("steps.csv")).expect("csv");
         assert!(rd.records().count() > 0);
         assert!(!r.figures.is_empty());

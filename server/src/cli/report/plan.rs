@@ -31,6 +31,11 @@ pub struct Plan {
     pub mass_ratios: Vec<f64>,
     /// Simulated seconds of each extremes run.
     pub extreme_duration: f64,
+    /// Mass ratios of the rapier comparison (`rapier.rs`).
+    pub rapier_ratios: Vec<f64>,
+    /// Simulated seconds of each run of the rapier comparison.
+    #[cfg_attr(not(feature = "rapier"), allow(dead_code))]
+    pub rapier_duration: f64,
 }
 
 impl Plan {
@@ -50,6 +55,8 @@ impl Plan {
                 compliances: vec![1e-8],
                 mass_ratios: vec![1e3],
                 extreme_duration: 0.1,
+                rapier_ratios: vec![1e1, 1e9],
+                rapier_duration: 0.25,
             };
         }
         let all_scenes = vec!["forklift", "winch", "forwarder", "crane", "offshore"];
@@ -75,6 +82,8 @@ impl Plan {
                 compliances: vec![1e-6, 1e-10, 1e-12],
                 mass_ratios: vec![1e2, 1e5, 1e9],
                 extreme_duration: 2.0,
+                rapier_ratios: vec![1e1, 1e5, 1e9],
+                rapier_duration: 3.0,
             };
         }
         Plan {
@@ -90,14 +99,17 @@ impl Plan {
             compliances: vec![1e-4, 1e-6, 1e-8, 1e-10, 1e-12],
             mass_ratios: vec![1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9],
             extreme_duration: 5.0,
+            rapier_ratios: vec![1e1, 1e3, 1e5, 1e7, 1e9],
+            rapier_duration: 5.0,
         }
     }
 
-    /// Units of work for the progress bar: scene runs, island sets, extremes runs.
+    /// Units of work for the progress bar: scene runs, island sets, extremes runs, rapier runs.
     pub fn units(&self) -> u64 {
         let runs = self.scenes.len() * (self.variants.len() + 1);
         let islands = self.scenes.len();
         let extremes = 2 * (self.compliances.len() + self.mass_ratios.len());
-        (runs + islands + extremes) as u64
+        let rapier = if super::rapier::BUILT { 3 * 2 * self.rapier_ratios.len() } else { 0 };
+        (runs + islands + extremes + rapier) as u64
     }
 }
