@@ -378,7 +378,8 @@ fn rapier(w: &mut String, r: &Report) {
          stack body moved > {} m. Read with it: pivotsim's default compliance 1e-10 m/N is a designed \
          stretch `c r g` under the load's weight (1 cm at r = 1e7, 1 m at 1e9), which `pivotsim-stiff` \
          removes; rapier's defaults allow 5 mm of penetration by design (it rests the stack at 4 mm at \
-         ratio 1). Plotted in [rapier_mass_ratio.svg](rapier_mass_ratio.svg).\n",
+         ratio 1), and it lets bodies sleep by default: `asleep` is the share of steps after which all \
+         of a rig's bodies slept (cheap steps, frozen poses; pivotsim has no sleeping). Plotted in [rapier_mass_ratio.svg](rapier_mass_ratio.svg).\n",
         rapier::BREAK_DRIFT_M,
         rapier::BREAK_PENETRATION_M,
         rapier::BREAK_ENERGY_GAIN,
@@ -386,13 +387,13 @@ fn rapier(w: &mut String, r: &Report) {
     );
     let _ = writeln!(
         w,
-        "| rig | mass ratio | engine | joint drift (m) | penetration (m) | energy change | max energy gain | time per step (µs) | broken |"
+        "| rig | mass ratio | engine | joint drift (m) | penetration (m) | energy change | max energy gain | time per step (µs) | asleep | broken |"
     );
-    let _ = writeln!(w, "|---|---|---|---|---|---|---|---|---|");
+    let _ = writeln!(w, "|---|---|---|---|---|---|---|---|---|---|");
     for p in &c.points {
         let _ = writeln!(
             w,
-            "| {} | {:.0e} | {} | {} | {} | {:+.1e} | {:.1e} | {:.0} | {} |",
+            "| {} | {:.0e} | {} | {} | {} | {:+.1e} | {:.1e} | {:.0} | {:.0} % | {} |",
             p.rig,
             p.ratio,
             p.engine,
@@ -401,6 +402,7 @@ fn rapier(w: &mut String, r: &Report) {
             p.energy_change_rel,
             p.energy_gain_rel,
             p.mean_step_us,
+            100.0 * p.steps_asleep as f64 / p.steps.max(1) as f64,
             p.broken.as_deref().unwrap_or("no")
         );
     }

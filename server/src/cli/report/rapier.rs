@@ -40,6 +40,8 @@
 //!   scale: 2 m, 1.2 m, 2 m): the change at the end (should be ≤ 0 and small: nothing drives these
 //!   rigs) and the largest gain over the run;
 //! - *time per step*: mean wall time of the engine's step call (µs, one thread), metrics excluded;
+//!   rapier's sleeping is on by default, and the steps after which all its bodies slept are
+//!   counted (`steps_asleep`): they are cheap, and a sleeping body keeps its pose;
 //! - *broken*: a non-finite state or a refused step, joint drift > 1 cm, penetration > 1 cm, an
 //!   energy gain > 10 % of `Σ m g ℓ`, or (the stack, which should rest) a body moved > 5 cm. The first
 //!   cause is recorded. "Where each engine breaks" is the smallest swept ratio at which a rig broke.
@@ -76,6 +78,9 @@ pub struct RapierPoint {
     pub mean_step_us: f64,
     /// Steps taken.
     pub steps: usize,
+    /// Steps after which every body was asleep (rapier's sleeping, on by default; pivotsim has
+    /// none): a sleeping body is not simulated, which makes those steps cheap and frozen.
+    pub steps_asleep: usize,
     /// Why the run is broken (`None`: it held).
     pub broken: Option<String>,
 }
@@ -296,6 +301,10 @@ mod compare {
         fn step(&mut self) -> Result<(), String>;
         /// The bodies' states, in the rig's order.
         fn states(&self, out: &mut Vec<State>);
+        /// Every body is asleep (not simulated).
+        fn asleep(&self) -> bool {
+            false
+        }
     }
 
     struct Pivotsim {
@@ -459,6 +468,10 @@ mod compare {
                 });
             }
         }
+
+        fn asleep(&self) -> bool {
+            self.handles.iter().all(|&h| self.world.bodies[h].is_sleeping())
+        }
     }
 
     /// Local anchors of a joint: on body `a`, and on body `b` (or the world point).
@@ -563,6 +576,7 @@ mod compare {
             energy_gain_rel: 0.0,
             mean_step_us: 0.0,
             steps: 0,
+            steps_asleep: 0,
             broken: None,
         };
         let mut wall = 0.0;
@@ -577,6 +591,7 @@ mod compare {
                 p.broken = Some(format!("step refused at t = {:.2} s: {msg}", p.steps as f64 * h));
                 break;
             }
+            p.steps_asleep += usize::from(e.asleep());
             e.states(&mut s);
             if !finite(&s) {
                 p.broken = Some(format!("non-finite state at t = {:.2} s", p.steps as f64 * h));
@@ -680,7 +695,7 @@ mod tests {
         let c = super::run(&plan, &indicatif::ProgressBar::hidden()).expect("run");
         for p in &c.points {
             println!(
-                "{:6} {:.0e} {:14} drift {:9.1e} pen {:9.1e} dE {:+.1e} gain {:.1e} {:.0} µs {}",
+                "{:6} {:.0e} {:14} drift {:9.1e} pen {:9.1e} dE {:+.1e} gain {:.1e} {:.0} µs asleep {}/{} {}",
                 p.rig,
                 p.ratio,
                 p.engine,
@@ -689,6 +704,8 @@ mod tests {
                 p.energy_change_rel,
                 p.energy_gain_rel,
                 p.mean_step_us,
+                p.steps_asleep,
+                p.steps,
                 p.broken.as_deref().unwrap_or("-")
             );
         }
