@@ -1,9 +1,10 @@
 //! Stage 5, the peer: rapier (`rapier3d-f64`, the engine a Rust user would pick instead) against
-//! pivotsim (with its default compliance and with compliance scaled to the load) on the same three rigs, swept over the mass ratio 1e1…1e9. Built only with the
-//! `rapier` feature (`cargo run --release -p pivotsim-server --features rapier -- report --out
-//! docs/report`); without it the report says so and `report.json` has `"rapier": null`.
+//! pivotsim (with its default compliance and with compliance scaled to the load) on the same three
+//! rigs, swept over the mass ratio 1e1…1e9. Built only with the `rapier` feature (`cargo run
+//! --release -p pivotsim-server --features rapier -- report --out docs/report`); without it the
+//! report says so and `report.json` has `"rapier": null`.
 //!
-//! **One description, two engines.** Each rig is a [`Rig`]: boxes (mass, half extents, initial
+//! **One description, both engines.** Each rig is a `Rig`: boxes (mass, half extents, initial
 //! position, all unrotated and at rest), ball and hinge joints (bodies, world anchor, world axis)
 //! and whether a ground plane is present. Both engines are built from it: the same masses, the same
 //! principal inertias (`box_inertia` of the box, handed to both — rapier gets them as the bodies'
@@ -18,9 +19,11 @@
 //!
 //! **The engines.**
 //!
-//! - `rapier`: rapier 0.36 with its defaults (`IntegrationParameters::default()`: the soft-
-//!   constraint solver with 4 iterations and 1 stabilisation iteration, 5 mm allowed penetration,
-//!   impulse joints, sleeping allowed) through its `PhysicsWorld`;
+//! - `rapier`: rapier 0.36 through its `PhysicsWorld` with its defaults: `IntegrationParameters::
+//!   default()` (`num_solver_iterations` 4, `num_internal_pgs_iterations` 1,
+//!   `num_internal_stabilization_iterations` 1, `normalized_allowed_linear_error` 5 mm, soft
+//!   contacts, `warmstart_joints` off), impulse joints (its default; its reduced-coordinate
+//!   multibody joints are not compared), sleeping allowed, one thread;
 //! - `pivotsim`: `auto` and every other world setting at its default (compliance 1e-10 m/N on joint
 //!   and contact rows, geometric stiffness on). A compliance is a designed stretch: a joint carrying
 //!   the weight of r kg gives by `c r g` (1 cm at r = 1e7, 1 m at r = 1e9);
@@ -607,9 +610,9 @@ mod compare {
             if p.broken.is_none() {
                 let t = p.steps as f64 * h;
                 p.broken = if drift_max > BREAK_DRIFT_M {
-                    Some(format!("joint drift {drift_max:.1e} m at t = {t:.2} s"))
+                    Some(format!("joint drift {drift_max:.2e} m at t = {t:.2} s"))
                 } else if pen_max > BREAK_PENETRATION_M {
-                    Some(format!("penetration {pen_max:.1e} m at t = {t:.2} s"))
+                    Some(format!("penetration {pen_max:.2e} m at t = {t:.2} s"))
                 } else if p.energy_gain_rel > BREAK_ENERGY_GAIN {
                     Some(format!("energy gain {:.2} at t = {t:.2} s", p.energy_gain_rel))
                 } else if rig.at_rest && moved > BREAK_REST_MOVE_M {
