@@ -376,8 +376,8 @@ fn rapier(w: &mut String, r: &Report) {
          gain; time: mean wall time of the engine's step call (one thread, shared machine). Broken: a \
          non-finite state or refused step, drift > {} m, penetration > {} m, energy gain > {}, or a \
          stack body moved > {} m. Read with it: pivotsim's default compliance 1e-10 m/N is a designed \
-         stretch `c r g` under the load's weight (1 cm at r = 1e7, 1 m at 1e9), which `pivotsim-stiff` \
-         removes; rapier's defaults allow 5 mm of penetration by design (it rests the stack at 4 mm at \
+         stretch `c r g` under the load's weight (1 cm at r = 1e7, 1 m at 1e9; a resting contact sinks \
+         by `c F / β`), which `pivotsim-stiff` removes; rapier's multibody joints are not run; rapier's defaults allow 5 mm of penetration by design (it rests the stack at 4 mm at \
          ratio 1), and it lets bodies sleep by default: `asleep` is the share of steps after which all \
          of a rig's bodies slept (cheap steps, frozen poses; pivotsim has no sleeping). Plotted in [rapier_mass_ratio.svg](rapier_mass_ratio.svg).\n",
         rapier::BREAK_DRIFT_M,

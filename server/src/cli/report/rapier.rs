@@ -48,6 +48,8 @@
 //! - *broken*: a non-finite state or a refused step, joint drift > 1 cm, penetration > 1 cm, an
 //!   energy gain > 10 % of `Σ m g ℓ`, or (the stack, which should rest) a body moved > 5 cm. The first
 //!   cause is recorded. "Where each engine breaks" is the smallest swept ratio at which a rig broke.
+//!
+//! What it measured on the development machine, and how to read it: `docs/notes/rapier.md`.
 
 use serde::Serialize;
 
