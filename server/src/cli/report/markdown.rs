@@ -7,6 +7,7 @@ use pivotsim_server::solver::Variant;
 use super::Report;
 use super::extremes::ExtremePoint;
 use super::islands::Spread;
+use super::rapier;
 
 /// A scene's row of the paper's Table 2 and Table 3.
 #[derive(Clone, Copy)]
@@ -68,7 +69,8 @@ pub fn readme(r: &Report) -> String {
     equal_time(&mut w, r);
     warm_start(&mut w, r);
     extremes(&mut w, r);
-    missing(&mut w);
+    rapier(&mut w, r);
+    missing(&mut w, r);
     w
 }
 
@@ -240,6 +242,8 @@ fn figures(w: &mut String, r: &Report) {
             "equal time: the payload's path with `auto` and with PGS at the same solve time per step"
         } else if f.starts_with("extremes") {
             "the extremes: joint error where each method holds and where it breaks"
+        } else if f.starts_with("rapier") {
+            "rapier against pivotsim over the mass ratio: drift, penetration, energy, time per step, breaks"
         } else {
             "figure"
         };
@@ -350,10 +354,94 @@ fn row(w: &mut String, p: &ExtremePoint) {
     );
 }
 
-fn missing(w: &mut String) {
-    let _ = writeln!(w, "## Not yet in this report\n");
-    let _ =
-        writeln!(w, "- the vehicle scene (not yet built);\n- rapier (`rapier3d-f64`) on the same rigs.\n");
+fn rapier(w: &mut String, r: &Report) {
+    let _ = writeln!(w, "## rapier\n");
+    let Some(c) = &r.rapier else {
+        let _ = writeln!(
+            w,
+            "Not built in: this binary was built without the `rapier` feature, so the comparison with \
+             rapier (`rapier3d-f64`) did not run. Build and run it with `{}`.\n",
+            rapier::HOW_TO_BUILD
+        );
+        return;
+    };
+    let _ = writeln!(
+        w,
+        "{} with its default solver and settings (`rapier`) against pivotsim (`auto`, defaults: \
+         `pivotsim`) and pivotsim with the compliance of its joint and contact rows divided by the mass \
+         ratio (`pivotsim-stiff`), on three rigs built from one description (module docs of \
+         `server/src/cli/report/rapier.rs`): `chain`, a load of r kg on 8 links of 1 kg (ball joints, \
+         released at 30°); `stack`, 6 boxes on the ground, 1 kg at the bottom and r kg alternating \
+         (contacts only); `arm`, a 1 kg arm on a hinge carrying a vehicle body of r kg on a second \
+         hinge (released horizontal). h = {:.4} s, {:.2} s each.\n",
+        c.rapier, c.timestep_s, c.duration_s,
+    );
+    let _ = writeln!(
+        w,
+        "Drift: largest joint anchor separation; penetration: deepest box vertex inside another box or \
+         below the ground; energy: change of `E = T + V` over `Σ m g ℓ` at the end, and its largest \
+         gain; time: mean wall time of the engine's step call (one thread, shared machine). Broken: a \
+         non-finite state or refused step, drift > {} m, penetration > {} m, energy gain > {}, or a \
+         stack body moved > {} m. Read with it: pivotsim's default compliance 1e-10 m/N is a designed \
+         stretch `c r g` under the load's weight (1 cm at r = 1e7, 1 m at 1e9; a resting contact sinks \
+         by `c F / β`), which `pivotsim-stiff` removes; rapier's multibody joints are not run; rapier's defaults allow 5 mm of penetration by design (it rests the stack at 4 mm at \
+         ratio 1), and it lets bodies sleep by default: `asleep` is the share of steps after which all \
+         of a rig's bodies slept (cheap steps, frozen poses; pivotsim has no sleeping). Plotted in [rapier_mass_ratio.svg](rapier_mass_ratio.svg).\n",
+        rapier::BREAK_DRIFT_M,
+        rapier::BREAK_PENETRATION_M,
+        rapier::BREAK_ENERGY_GAIN,
+        rapier::BREAK_REST_MOVE_M
+    );
+    let _ = writeln!(
+        w,
+        "| rig | mass ratio | engine | joint drift (m) | penetration (m) | energy change | max energy gain | time per step (µs) | asleep | broken |"
+    );
+    let _ = writeln!(w, "|---|---|---|---|---|---|---|---|---|---|");
+    for p in &c.points {
+        let _ = writeln!(
+            w,
+            "| {} | {:.0e} | {} | {} | {} | {:+.1e} | {:.1e} | {:.0} | {:.0} % | {} |",
+            p.rig,
+            p.ratio,
+            p.engine,
+            sci(p.max_drift_m),
+            sci(p.max_penetration_m),
+            p.energy_change_rel,
+            p.energy_gain_rel,
+            p.mean_step_us,
+            100.0 * p.steps_asleep as f64 / p.steps.max(1) as f64,
+            p.broken.as_deref().unwrap_or("no")
+        );
+    }
+    let top = c.points.iter().map(|p| p.ratio).fold(0.0, f64::max);
+    let _ = writeln!(w, "\nWhere each engine breaks (the smallest swept mass ratio at which it broke):\n");
+    for rig in c.rigs() {
+        let at = |engine: &str| {
+            c.breaks_at(engine, rig)
+                .map_or(format!("{engine} holds up to {top:.0e}"), |x| format!("{engine} breaks at {x:.0e}"))
+        };
+        let all: Vec<String> = c.engines().into_iter().map(at).collect();
+        let _ = writeln!(w, "- {rig}: {}.", all.join("; "));
+    }
+    w.push('\n');
+}
+
+fn missing(w: &mut String, r: &Report) {
+    let mut gaps = Vec::new();
+    if !r.scenes.iter().any(|s| s.scene == "vehicle") {
+        gaps.push("- the vehicle scene (not in this run's plan);");
+    }
+    if r.rapier.is_none() {
+        gaps.push("- rapier (`rapier3d-f64`) on the same rigs: built with the `rapier` feature;");
+    }
+    if gaps.is_empty() {
+        return;
+    }
+    let _ = writeln!(w, "## Not in this report\n");
+    for g in gaps {
+        let _ = writeln!(w, "{g}");
+    }
+    w.push('\n');
 }
 
 fn fig4(w: &mut String, r: &Report) {

@@ -20,7 +20,11 @@
 //!    and on the envelope.
 //! 6. **Equal time** (`equal_time.rs`): each scene with PGS given `auto`'s solve time per step —
 //!    joint error, penetration, where the payload ends.
-//! 7. `README.md` (tables, links to the figures), `report.json` (every number), `steps.csv` (the
+//! 7. **rapier** (`rapier.rs`, built with the `rapier` feature): rapier and pivotsim on three rigs
+//!    built from one description — a heavy load on a light chain, a stack of alternating masses, a
+//!    vehicle body on a hinged arm — over the mass ratio 1e1…1e9: joint drift, penetration, energy,
+//!    time per step, and where each engine breaks.
+//! 8. `README.md` (tables, links to the figures), `report.json` (every number), `steps.csv` (the
 //!    per-step series) and the SVG figures in the output directory.
 //!
 //! | file | what |
@@ -31,6 +35,7 @@
 //! | `extremes.rs` | stage 4 |
 //! | `fig4.rs` | stage 5 |
 //! | `equal_time.rs` | stage 6 |
+//! | `rapier.rs` | stage 7: the comparison with rapier (feature `rapier`) |
 //! | `markdown.rs` | `README.md` |
 //! | `plots.rs` | the figures |
 
@@ -41,6 +46,7 @@ mod islands;
 mod markdown;
 mod plan;
 mod plots;
+mod rapier;
 mod scenes;
 
 use std::path::{Path, PathBuf};
@@ -97,6 +103,8 @@ pub struct Report {
     pub fig4: fig4::Fig4,
     /// Stage 6, per scene.
     pub equal_time: Vec<equal_time::EqualTime>,
+    /// Stage 7 (`None`: built without the `rapier` feature).
+    pub rapier: Option<rapier::RapierComparison>,
     /// The figures written (file names in the output directory).
     pub figures: Vec<String>,
 }
@@ -116,8 +124,13 @@ pub fn run(cfg: &ReportConfig) -> anyhow::Result<Report> {
     let extremes = extremes::run(&plan, &pb)?;
     let fig4 = fig4::run(&plan, &pb);
     let equal_time = equal_time::run(&plan, &pb)?;
+    #[cfg(feature = "rapier")]
+    let rapier = Some(rapier::run(&plan, &pb)?);
+    #[cfg(not(feature = "rapier"))]
+    let rapier = None;
     pb.finish_and_clear();
-    let mut report = Report { machine, scenes, islands, extremes, fig4, equal_time, figures: Vec::new() };
+    let mut report =
+        Report { machine, scenes, islands, extremes, fig4, equal_time, rapier, figures: Vec::new() };
     report.figures = plots::write_all(&cfg.out, &report)?;
     report.machine.wall_s = t0.elapsed().as_secs_f64();
     write_outputs(&cfg.out, &report)?;
@@ -195,9 +208,17 @@ mod tests {
         let r = run(&cfg).expect("report");
         // The files appear and parse; the numbers are the report's business, not this test's.
         let md = std::fs::read_to_string(dir.join("README.md")).expect("README.md");
-        for heading in
-            ["Table 2", "Table 3", "Table 4", "Fig. 4", "trade", "equal time", "Warm start", "Extremes"]
-        {
+        for heading in [
+            "Table 2",
+            "Table 3",
+            "Table 4",
+            "Fig. 4",
+            "trade",
+            "equal time",
+            "Warm start",
+            "Extremes",
+            "## rapier",
+        ] {
             assert!(md.contains(heading), "README.md lacks {heading}");
         }
         let json: serde_json::Value =
@@ -206,6 +227,9 @@ mod tests {
         assert!(json["scenes"].as_array().is_some_and(|s| !s.is_empty()));
         assert!(json["equal_time"].as_array().is_some_and(|s| !s.is_empty()));
         assert!(json["fig4"]["dense"].as_array().is_some_and(|s| !s.is_empty()));
+        // The comparison is there exactly when it is built in.
+        assert_eq!(json["rapier"]["points"].as_array().is_some_and(|p| !p.is_empty()), rapier::BUILT);
+        assert_eq!(md.to_lowercase().contains("where each engine breaks"), rapier::BUILT);
         let mut rd = csv::Reader::from_path(dir.join("steps.csv")).expect("csv");
         assert!(rd.records().count() > 0);
         assert!(!r.figures.is_empty());

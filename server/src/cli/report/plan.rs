@@ -39,6 +39,11 @@ pub struct Plan {
     pub fig4_fracs: Vec<f64>,
     /// Target µs of one timing sample of Fig. 4.
     pub fig4_target_us: f64,
+    /// Mass ratios of the rapier comparison (`rapier.rs`).
+    pub rapier_ratios: Vec<f64>,
+    /// Simulated seconds of each run of the rapier comparison.
+    #[cfg_attr(not(feature = "rapier"), allow(dead_code))]
+    pub rapier_duration: f64,
 }
 
 impl Plan {
@@ -62,6 +67,8 @@ impl Plan {
                 fig4_sizes: vec![20],
                 fig4_fracs: vec![10.0, 50.0],
                 fig4_target_us: 20.0,
+                rapier_ratios: vec![1e1, 1e9],
+                rapier_duration: 0.25,
             };
         }
         let all_scenes = vec!["forklift", "winch", "forwarder", "crane", "offshore"];
@@ -91,6 +98,8 @@ impl Plan {
                 fig4_sizes: vec![50, 200],
                 fig4_fracs: vec![5.0, 20.0, 50.0],
                 fig4_target_us: 300.0,
+                rapier_ratios: vec![1e1, 1e5, 1e9],
+                rapier_duration: 3.0,
             };
         }
         Plan {
@@ -110,15 +119,18 @@ impl Plan {
             fig4_sizes: vec![50, 100, 200, 430, 700],
             fig4_fracs: vec![1.0, 5.0, 10.0, 20.0, 30.0, 50.0],
             fig4_target_us: 1_000.0,
+            rapier_ratios: vec![1e1, 1e3, 1e5, 1e7, 1e9],
+            rapier_duration: 5.0,
         }
     }
 
     /// Units of work for the progress bar: scene runs, island sets, extremes runs, Fig. 4 sizes,
-    /// equal-time scenes.
+    /// equal-time scenes, rapier runs.
     pub fn units(&self) -> u64 {
         let runs = self.scenes.len() * (self.variants.len() + 1);
         let islands = self.scenes.len();
         let extremes = self.extreme_variants.len() * (self.compliances.len() + self.mass_ratios.len());
-        (runs + islands + extremes + self.fig4_sizes.len() + self.scenes.len()) as u64
+        let rapier = if super::rapier::BUILT { 3 * 2 * self.rapier_ratios.len() } else { 0 };
+        (runs + islands + extremes + self.fig4_sizes.len() + self.scenes.len() + rapier) as u64
     }
 }

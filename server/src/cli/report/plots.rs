@@ -8,6 +8,7 @@ use plotters::prelude::*;
 
 use super::Report;
 use super::extremes::ExtremePoint;
+use super::rapier::{RapierComparison, RapierPoint};
 
 /// A named polyline.
 struct Series {
@@ -159,6 +160,11 @@ pub fn write_all(out: &Path, r: &Report) -> anyhow::Result<Vec<String>> {
         series,
         vec![],
     )?;
+    if let Some(c) = &r.rapier {
+        let name = "rapier_mass_ratio.svg";
+        rapier_figure(&out.join(name), c).with_context(|| format!("figure {name}"))?;
+        names.push(name.to_string());
+    }
     for i in &r.islands {
         if let Some(f) = &i.sparsity_figure {
             names.push(f.clone());
@@ -197,6 +203,24 @@ fn lines(
     series: &[Series],
     marks: &[(f64, f64)],
 ) -> anyhow::Result<()> {
+    let root = SVGBackend::new(path, (1000, 600)).into_drawing_area();
+    root.fill(&WHITE).map_err(plot_err)?;
+    panel(&root, title, 22, (x_desc, y_desc), series, marks, 0.0)?;
+    root.present().map_err(plot_err)?;
+    Ok(())
+}
+
+/// A line chart of `series` with red crosses at `marks`, drawn on `area`; the x axis runs on by
+/// `legend_room` of its range at the right, where the legend goes.
+fn panel(
+    area: &DrawingArea<SVGBackend<'_>, plotters::coord::Shift>,
+    title: &str,
+    title_size: u32,
+    (x_desc, y_desc): (&str, &str),
+    series: &[Series],
+    marks: &[(f64, f64)],
+    legend_room: f64,
+) -> anyhow::Result<()> {
     let all = series
         .iter()
         .flat_map(|s| s.points.iter())
@@ -212,10 +236,9 @@ fn lines(
     }
     let pad = |a: f64, b: f64| if b - a > 0.0 { 0.05 * (b - a) } else { 0.5 };
     let (px, py) = (pad(x0, x1), pad(y0, y1));
-    let root = SVGBackend::new(path, (1000, 600)).into_drawing_area();
-    root.fill(&WHITE).map_err(plot_err)?;
-    let mut chart = ChartBuilder::on(&root)
-        .caption(title, ("sans-serif", 22))
+    x1 += legend_room * (x1 - x0);
+    let mut chart = ChartBuilder::on(area)
+        .caption(title, ("sans-serif", title_size))
         .margin(15)
         .x_label_area_size(45)
         .y_label_area_size(70)
@@ -247,6 +270,44 @@ fn lines(
         .border_style(BLACK)
         .draw()
         .map_err(plot_err)?;
+    Ok(())
+}
+
+/// A value of a run of the rapier comparison (`None`: not plotted).
+type Metric = fn(&RapierPoint) -> Option<f64>;
+
+/// The rapier comparison in one figure: four panels over `log₁₀` of the mass ratio — joint drift
+/// (the jointed rigs), penetration (the stack), `|ΔE|` at the end and time per step (every rig) —
+/// one line per engine × rig, red crosses where a run broke.
+fn rapier_figure(path: &Path, c: &RapierComparison) -> anyhow::Result<()> {
+    let root = SVGBackend::new(path, (1400, 1000)).into_drawing_area();
+    root.fill(&WHITE).map_err(plot_err)?;
+    let areas = root.split_evenly((2, 2));
+    let metric: [(&str, &str, Metric); 4] = [
+        ("joint drift (chain, arm)", "log10(max joint drift, m)", |p| p.max_drift_m),
+        ("penetration (stack)", "log10(max penetration, m)", |p| p.max_penetration_m),
+        ("energy change at the end", "log10(|ΔE| / Σ m g l)", |p| Some(p.energy_change_rel.abs())),
+        ("time per step", "log10(mean step time, µs)", |p| Some(p.mean_step_us)),
+    ];
+    for (area, (title, y, f)) in areas.iter().zip(metric) {
+        let mut series: Vec<Series> = Vec::new();
+        let mut marks = Vec::new();
+        for p in &c.points {
+            let Some(v) = f(p) else { continue };
+            let ly = v.max(1e-16).log10();
+            let pt = (p.ratio.log10(), if ly.is_finite() { ly } else { 2.0 });
+            if p.broken.is_some() {
+                marks.push(pt);
+            }
+            let name = format!("{} {}", p.engine, p.rig);
+            match series.iter_mut().find(|s| s.name == name) {
+                Some(s) => s.points.push(pt),
+                None => series.push(Series { name, points: vec![pt] }),
+            }
+        }
+        let title = format!("rapier vs pivotsim: {title} (x: broken)");
+        panel(area, &title, 18, ("log10(mass ratio)", y), &series, &marks, 0.45)?;
+    }
     root.present().map_err(plot_err)?;
     Ok(())
 }
