@@ -345,3 +345,15 @@ fn the_joint_error_excludes_a_prismatic_slide() {
     // What remains is the compliant sag under gravity: c m g ≈ 1e-10 · 49 N per row.
     assert!(w.max_joint_error() < 1e-7, "{}", w.max_joint_error());
 }
+
+#[test]
+fn the_contact_margin_is_read_and_checked() {
+    let default = load(HEADER).world.contact_settings().margin;
+    assert_eq!(default, 0.01);
+    let sc = load("[scene]\nname = \"t\"\ncontact_margin = 0.05\n");
+    assert_eq!(sc.world.contact_settings().margin, 0.05);
+    for bad in ["-0.1", "nan"] {
+        let e = load_err(&format!("[scene]\nname = \"t\"\ncontact_margin = {bad}\n"));
+        assert!(e.to_string().contains("contact_margin"), "{e}");
+    }
+}
