@@ -355,3 +355,15 @@ fn pgs_sweeps_caps_the_projected_gauss_seidel_sweeps() {
     let e = load_err("[scene]\nname = \"t\"\npgs_sweeps = 0\n").to_string();
     assert!(e.contains("pgs_sweeps") && e.contains("≥ 1"), "{e}");
 }
+
+#[test]
+fn the_contact_margin_is_read_and_checked() {
+    let default = load(HEADER).world.contact_settings().margin;
+    assert_eq!(default, 0.01);
+    let sc = load("[scene]\nname = \"t\"\ncontact_margin = 0.05\n");
+    assert_eq!(sc.world.contact_settings().margin, 0.05);
+    for bad in ["-0.1", "nan"] {
+        let e = load_err(&format!("[scene]\nname = \"t\"\ncontact_margin = {bad}\n"));
+        assert!(e.to_string().contains("contact_margin"), "{e}");
+    }
+}

@@ -702,7 +702,7 @@ impl<'a> Builder<'a> {
     }
 
     /// The scene-wide defaults of the `[scene]` section: friction and compliance of the items that
-    /// give none, the contact compliance.
+    /// give none, the contact compliance and prediction margin.
     fn scene_defaults(&mut self, sspan: &Range<usize>, sec: &SceneSection) -> R<()> {
         self.default_mu = self.non_negative(sspan, "friction", sec.friction.unwrap_or(1.0))?;
         self.default_compliance = self.non_negative(
@@ -716,6 +716,13 @@ impl<'a> Builder<'a> {
             self.world
                 .set_contact_settings(cs)
                 .map_err(|e| self.invalid(sspan, "contact_compliance", e.to_string()))?;
+        }
+        if let Some(m) = sec.contact_margin {
+            let mut cs = self.world.contact_settings();
+            cs.margin = self.non_negative(sspan, "contact_margin", m)?;
+            self.world
+                .set_contact_settings(cs)
+                .map_err(|e| self.invalid(sspan, "contact_margin", e.to_string()))?;
         }
         Ok(())
     }

@@ -35,6 +35,7 @@ pub const BUILTIN: &[BuiltinScene] = &[
         "offshore",
         "a 50 t knuckle-boom crane on a floating 5,500 t ship drags a 15 t module on deck and lifts it"
     ),
+    scene!("vehicle", "a 15 t eight-wheeled armoured vehicle drives over bumps, stairs and hills"),
 ];
 
 /// The built-in scene `name`.

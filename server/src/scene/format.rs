@@ -49,6 +49,7 @@ pub(crate) struct SceneSection {
     pub variant: Option<String>,
     pub compliance: Option<f64>,
     pub contact_compliance: Option<f64>,
+    pub contact_margin: Option<f64>,
     pub friction: Option<f64>,
     pub max_pivot_steps: Option<usize>,
     pub max_solve_us: Option<f64>,

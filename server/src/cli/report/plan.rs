@@ -71,7 +71,7 @@ impl Plan {
                 rapier_duration: 0.25,
             };
         }
-        let all_scenes = vec!["forklift", "winch", "forwarder", "crane", "offshore"];
+        let all_scenes = vec!["forklift", "winch", "forwarder", "crane", "offshore", "vehicle"];
         let variants = vec![
             Variant::Full,
             Variant::Downdate,
