@@ -83,6 +83,8 @@ pub struct IslandsResult {
     pub trade: Vec<TradeCurve>,
     /// The sparsity figure of the largest island, if written.
     pub sparsity_figure: Option<String>,
+    /// The paper's tight-rows-last ordering against RCM on the warm-started islands.
+    pub tight_last: Vec<super::tight_last::TightLast>,
 }
 
 /// Runs stage 2 for every scene.
@@ -154,6 +156,7 @@ fn analyse(
         deletion_skyline: deletion_errors(&colds, Variant::Skyline),
         trade: trade(plan, problems),
         sparsity_figure,
+        tight_last: super::tight_last::run(scene, problems, plan.repeats),
     })
 }
 

@@ -35,6 +35,7 @@
 //! | `extremes.rs` | stage 4 |
 //! | `fig4.rs` | stage 5 |
 //! | `equal_time.rs` | stage 6 |
+//! | `tight_last.rs` | stage 2: the paper's tight-rows-last ordering against RCM on the warm islands |
 //! | `rapier.rs` | stage 7: the comparison with rapier (feature `rapier`) |
 //! | `markdown.rs` | `README.md` |
 //! | `plots.rs` | the figures |
@@ -48,6 +49,7 @@ mod plan;
 mod plots;
 mod rapier;
 mod scenes;
+mod tight_last;
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
