@@ -1,6 +1,6 @@
 //! Stage 4, the extremes: the winch over the compliance of its joints and contacts, and the crane
 //! over the mass ratio of its load (pipe mass / lightest body, a cable segment of 1.75 kg), each
-//! with block pivoting (`auto`, cap 35; in the full report also `skyline` and `full`, which must agree
+//! with block pivoting (`auto`, cap 35; in the full report every exact variant, which must agree
 //! with it) and with projected Gauss–Seidel (its default 100 sweeps): where each method holds and
 //! where it breaks.
 

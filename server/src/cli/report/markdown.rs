@@ -349,7 +349,7 @@ fn extremes(w: &mut String, r: &Report) {
         w,
         "The winch over the compliance of its joints and contacts, and the crane over its load's mass \
          ratio (pipe mass over its lightest body, a 1.75 kg cable segment), with block pivoting (`auto`, \
-         cap 35; the full report adds `skyline` and `full`) and projected Gauss–Seidel (100 sweeps). \
+         cap 35; the full report adds every other exact variant) and projected Gauss–Seidel (100 sweeps). \
          Plotted in `extremes_*.svg`.\n"
     );
     for (title, pts) in [
