@@ -22,10 +22,12 @@
 mod scene_run;
 
 use pivotsim_server::dynamics::World;
-use pivotsim_server::run::{RunOptions, RunSummary, run_scene_observed};
+use pivotsim_server::run::RunSummary;
 use pivotsim_server::scene;
 use pivotsim_server::solver::Variant;
-use scene_run::{SceneRun, assert_near_paper, max_trajectory_difference, run_builtin};
+use scene_run::{
+    SceneRun, assert_near_paper, max_trajectory_difference, print_summary, run_builtin, run_watched,
+};
 
 /// Simulated seconds of the watched runs.
 const DURATION: f64 = 40.0;
@@ -96,38 +98,8 @@ fn watch(w: &World) -> Watch {
     watched
 }
 
-/// The scene under its script with `variant` (and `set` overrides) for `duration`, recording
-/// positions and a [`Watch`] after every step.
-fn run_watched(variant: Variant, duration: f64, set: &[&str]) -> (SceneRun, Vec<Watch>) {
-    let set: Vec<_> = set.iter().map(|s| s.parse().expect("override")).collect();
-    let mut sc = scene::load_with("crane", &set).expect("crane");
-    let opts =
-        RunOptions { duration: Some(duration), variant: Some(variant), every: 1, ..RunOptions::default() };
-    let (mut positions, mut watched) = (Vec::new(), Vec::new());
-    let summary = run_scene_observed(&mut sc, &opts, |w| {
-        positions.push(w.bodies().iter().map(|b| b.position()).collect());
-        watched.push(watch(w));
-    })
-    .expect("run");
-    assert!(summary.finite, "crane: {:?} at t = {}", summary.error, sc.world.time());
-    (SceneRun { scene: sc, positions, summary }, watched)
-}
-
 fn report(what: &str, s: &RunSummary) {
-    let solves = s.solves_converged + s.solves_inexact + s.solves_max_steps + s.solves_other;
-    eprintln!(
-        "crane ({what}): {} steps, largest island {} rows, mass ratio {:.0}, {} of {solves} solves at the \
-         cap, most pivot steps {}, joint error {:.2e} m, stable {}, solve mean {:.0} µs, max {:.0} µs",
-        s.steps,
-        s.max_island_rows,
-        s.max_mass_ratio,
-        s.solves_max_steps,
-        s.max_pivot_steps,
-        s.max_joint_error_m,
-        s.stable,
-        s.mean_solve_us,
-        s.max_solve_us
-    );
+    print_summary("crane", what, s);
 }
 
 fn assert_clean(what: &str, s: &RunSummary) {
@@ -158,14 +130,14 @@ fn crane_hoists_the_pipe_by_contact_and_it_hangs_still() {
     assert_eq!(scene_cap, 35, "the scene runs at the paper's cap");
 
     // The paper's 20 s, then the 40 s watch.
-    let (paper, _) = run_watched(Variant::Skyline, PAPER, &[]);
+    let (paper, _) = run_watched("crane", Variant::Skyline, PAPER, &[], |_| watch);
     let s = &paper.summary;
     assert_clean("skyline, 20 s", s);
     assert_eq!(s.steps, 1200);
     assert_near_paper("largest island rows", s.max_island_rows as f64, 430.0, 0.25);
     assert_near_paper("largest island mass ratio", s.max_mass_ratio, 6300.0, 0.25);
 
-    let (sky, watched) = run_watched(Variant::Skyline, DURATION, &[]);
+    let (sky, watched) = run_watched("crane", Variant::Skyline, DURATION, &[], |_| watch);
     assert_clean("skyline, 40 s", &sky.summary);
     let w = &sky.scene.world;
     let pipe = body(w, "pipe");
@@ -240,7 +212,7 @@ fn crane_runs_across_the_papers_compliance_range_at_cap_35() {
     for c in ["1e-6", "1e-10"] {
         let set = [format!("contact_compliance={c}"), "max_pivot_steps=35".to_string()];
         let set: Vec<&str> = set.iter().map(String::as_str).collect();
-        let (run, watched) = run_watched(Variant::Auto, PAPER, &set);
+        let (run, watched) = run_watched("crane", Variant::Auto, PAPER, &set, |_| watch);
         assert_clean(&format!("auto, contact compliance {c}"), &run.summary);
         let pipe = body(&run.scene.world, "pipe");
         let lift = run.positions.last().unwrap()[pipe].z - run.positions[0][pipe].z;

@@ -29,10 +29,9 @@ mod scene_run;
 
 use nalgebra::Vector3;
 use pivotsim_server::dynamics::World;
-use pivotsim_server::run::{RunOptions, RunSummary, run_scene_observed};
-use pivotsim_server::scene;
+use pivotsim_server::run::RunSummary;
 use pivotsim_server::solver::Variant;
-use scene_run::{SceneRun, assert_near_paper, max_trajectory_difference, run_builtin};
+use scene_run::{assert_near_paper, max_trajectory_difference, print_summary, run_builtin, run_watched};
 
 /// The paper's run length (s).
 const PAPER: f64 = 20.0;
@@ -106,38 +105,8 @@ fn watch(w: &World) -> Watch {
     }
 }
 
-/// The scene under its script with `variant` (and `set` overrides), recording positions and a
-/// [`Watch`] after every step.
-fn run_watched(variant: Variant, set: &[&str]) -> (SceneRun, Vec<Watch>) {
-    let set: Vec<_> = set.iter().map(|s| s.parse().expect("override")).collect();
-    let mut sc = scene::load_with("offshore", &set).expect("offshore");
-    let opts =
-        RunOptions { duration: Some(PAPER), variant: Some(variant), every: 1, ..RunOptions::default() };
-    let (mut positions, mut watched) = (Vec::new(), Vec::new());
-    let summary = run_scene_observed(&mut sc, &opts, |w| {
-        positions.push(w.bodies().iter().map(|b| b.position()).collect());
-        watched.push(watch(w));
-    })
-    .expect("run");
-    assert!(summary.finite, "offshore: {:?} at t = {}", summary.error, sc.world.time());
-    (SceneRun { scene: sc, positions, summary }, watched)
-}
-
 fn assert_clean(what: &str, s: &RunSummary) {
-    let solves = s.solves_converged + s.solves_inexact + s.solves_max_steps + s.solves_other;
-    eprintln!(
-        "offshore ({what}): {} steps, largest island {} rows, mass ratio {:.3e}, {} of {solves} solves at the \
-         cap, most pivot steps {}, joint error {:.2e} m, stable {}, solve mean {:.0} µs, max {:.0} µs",
-        s.steps,
-        s.max_island_rows,
-        s.max_mass_ratio,
-        s.solves_max_steps,
-        s.max_pivot_steps,
-        s.max_joint_error_m,
-        s.stable,
-        s.mean_solve_us,
-        s.max_solve_us
-    );
+    print_summary("offshore", what, s);
     assert!(s.finite && s.stable && s.unstable_steps == 0, "{what}: {:?}", s.instability);
     assert_eq!(s.solves_max_steps, 0, "{what}: solves stopped at the cap");
     assert!(s.max_joint_error_m <= 1e-4, "{what}: joint error {} m", s.max_joint_error_m);
@@ -155,7 +124,7 @@ fn deck_force(watched: &[Watch], k: usize, mass: f64, h: f64) -> (f64, f64) {
 
 #[test]
 fn offshore_crane_drags_the_module_on_the_deck_then_lifts_it_clear() {
-    let (sky, watched) = run_watched(Variant::Skyline, &[]);
+    let (sky, watched) = run_watched("offshore", Variant::Skyline, PAPER, &[], |_| watch);
     let s = &sky.summary;
     assert_clean("skyline", s);
     assert_eq!(s.steps, 1200);
@@ -247,7 +216,7 @@ fn offshore_runs_across_the_papers_compliance_range_at_cap_35() {
     for c in ["1e-6", "1e-10"] {
         let set = [format!("contact_compliance={c}"), "max_pivot_steps=35".to_string()];
         let set: Vec<&str> = set.iter().map(String::as_str).collect();
-        let (run, watched) = run_watched(Variant::Auto, &set);
+        let (run, watched) = run_watched("offshore", Variant::Auto, PAPER, &set, |_| watch);
         assert_clean(&format!("auto, contact compliance {c}"), &run.summary);
         let last = watched.last().unwrap();
         let lift = last.on_ship.z - watched[0].on_ship.z;

@@ -26,10 +26,11 @@ mod scene_run;
 
 use nalgebra::Vector3;
 use pivotsim_server::dynamics::{JointId, World};
-use pivotsim_server::run::{RunOptions, RunSummary, run_scene_observed};
-use pivotsim_server::scene;
+use pivotsim_server::run::RunSummary;
 use pivotsim_server::solver::Variant;
-use scene_run::{SceneRun, assert_near_paper, max_trajectory_difference, run_builtin};
+use scene_run::{
+    SceneRun, assert_near_paper, max_trajectory_difference, print_summary, run_builtin, run_watched,
+};
 
 /// The paper's run length (s).
 const PAPER: f64 = 20.0;
@@ -160,45 +161,26 @@ fn watch(w: &World, axes: &[Vector3<f64>], x_start: &[Vector3<f64>]) -> Watch {
 }
 
 /// The scene under its script with `variant` (and `set` overrides) for the paper's 20 s, recording
-/// positions and a [`Watch`] after every step.
-fn run_watched(variant: Variant, set: &[&str]) -> (SceneRun, Vec<Watch>) {
-    let set: Vec<_> = set.iter().map(|s| s.parse().expect("override")).collect();
-    let mut sc = scene::load_with("vehicle", &set).expect("vehicle");
-    let opts =
-        RunOptions { duration: Some(PAPER), variant: Some(variant), every: 1, ..RunOptions::default() };
+/// positions and a [`Watch`] after every step (speeds measured about the joint axes and from the
+/// positions at the start of each step).
+fn run_vehicle(variant: Variant, set: &[&str]) -> (SceneRun, Vec<Watch>) {
     let axes_now = |w: &World| -> Vec<Vector3<f64>> {
         w.joints().iter().map(|j| w.joint_frames_world(j.id()).expect("frames").axis_a).collect()
     };
-    let mut axes = axes_now(&sc.world);
-    let mut x_start: Vec<Vector3<f64>> = sc.world.bodies().iter().map(|b| b.position()).collect();
-    let (mut positions, mut watched) = (Vec::new(), Vec::new());
-    let summary = run_scene_observed(&mut sc, &opts, |w| {
-        watched.push(watch(w, &axes, &x_start));
-        x_start = w.bodies().iter().map(|b| b.position()).collect();
-        positions.push(x_start.clone());
-        axes = axes_now(w);
+    run_watched("vehicle", variant, PAPER, set, |w0| {
+        let mut axes = axes_now(w0);
+        let mut x_start: Vec<Vector3<f64>> = w0.bodies().iter().map(|b| b.position()).collect();
+        move |w| {
+            let watched = watch(w, &axes, &x_start);
+            x_start = w.bodies().iter().map(|b| b.position()).collect();
+            axes = axes_now(w);
+            watched
+        }
     })
-    .expect("run");
-    assert!(summary.finite, "vehicle: {:?} at t = {}", summary.error, sc.world.time());
-    (SceneRun { scene: sc, positions, summary }, watched)
 }
 
 fn assert_clean(what: &str, s: &RunSummary, max_capped: u64) {
-    let solves = s.solves_converged + s.solves_inexact + s.solves_max_steps + s.solves_other;
-    eprintln!(
-        "vehicle ({what}): {} steps, largest island {} rows, mass ratio {:.0}, {} of {solves} solves at the \
-         cap ({} inexact), most pivot steps {}, joint error {:.2e} m, stable {}, solve mean {:.0} µs, max {:.0} µs",
-        s.steps,
-        s.max_island_rows,
-        s.max_mass_ratio,
-        s.solves_max_steps,
-        s.solves_inexact,
-        s.max_pivot_steps,
-        s.max_joint_error_m,
-        s.stable,
-        s.mean_solve_us,
-        s.max_solve_us
-    );
+    print_summary("vehicle", what, s);
     assert!(s.finite && s.stable && s.unstable_steps == 0, "{what}: {:?}", s.instability);
     assert!(s.solves_max_steps <= max_capped, "{what}: {} solves stopped at the cap", s.solves_max_steps);
     assert!(s.max_joint_error_m <= 1e-4, "{what}: joint error {} m", s.max_joint_error_m);
@@ -220,7 +202,7 @@ fn assert_crossed(what: &str, watched: &[Watch]) {
 
 #[test]
 fn vehicle_crosses_the_parkour_with_its_gear_ratios_held() {
-    let (sky, watched) = run_watched(Variant::Skyline, &[]);
+    let (sky, watched) = run_vehicle(Variant::Skyline, &[]);
     let s = &sky.summary;
     assert_clean("skyline", s, 0);
     assert_eq!(s.steps, 1200);
@@ -275,7 +257,7 @@ fn vehicle_runs_across_the_papers_compliance_range_at_cap_35() {
     for c in ["1e-6", "1e-10"] {
         let set = [format!("contact_compliance={c}"), "max_pivot_steps=35".to_string()];
         let set: Vec<&str> = set.iter().map(String::as_str).collect();
-        let (run, watched) = run_watched(Variant::Auto, &set);
+        let (run, watched) = run_vehicle(Variant::Auto, &set);
         let what = format!("auto, contact compliance {c}");
         // At 1e-10 one solve of the 20 s (step 307, 252 rows) needs 36 pivot steps with today's
         // solver defaults (29 at most with block pivots after friction updates, the earlier
