@@ -6,8 +6,8 @@ use pivotsim_server::solver::Variant;
 
 use super::Report;
 use super::extremes::ExtremePoint;
-use super::islands::Spread;
 use super::rapier;
+use super::spread::Spread;
 
 /// A scene's row of the paper's Table 2 and Table 3.
 #[derive(Clone, Copy)]

@@ -39,6 +39,7 @@
 //! | `rapier.rs` | stage 7: the comparison with rapier (feature `rapier`) |
 //! | `markdown.rs` | `README.md` |
 //! | `plots.rs` | the figures |
+//! | `spread.rs` | min / max / mean / median of a sample |
 
 mod equal_time;
 mod extremes;
@@ -49,6 +50,7 @@ mod plan;
 mod plots;
 mod rapier;
 mod scenes;
+mod spread;
 mod tight_last;
 
 use std::path::{Path, PathBuf};

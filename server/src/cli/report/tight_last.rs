@@ -16,7 +16,7 @@ use pivotsim_server::solver::{
 };
 use serde::Serialize;
 
-use super::islands::Spread;
+use super::spread::Spread;
 
 /// One scene, one variant.
 #[derive(Debug, Clone, Serialize)]
