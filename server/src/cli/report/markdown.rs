@@ -350,7 +350,7 @@ fn extremes(w: &mut String, r: &Report) {
         "The winch over the compliance of its joints and contacts, and the crane over its load's mass \
          ratio (pipe mass over its lightest body, a 1.75 kg cable segment), with block pivoting (`auto`, \
          cap 35; the full report adds every other exact variant) and projected Gauss–Seidel (100 sweeps). \
-         Plotted in `extremes_*.svg`.\n"
+         Plotted in `extremes.svg`, one panel per sweep.\n"
     );
     for (title, pts) in [
         ("winch, compliance", &r.extremes.winch_compliance),

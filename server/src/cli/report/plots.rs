@@ -19,6 +19,8 @@ struct Series {
 /// Writes every figure; returns their file names (Fig. 5/6 of stage 2 included).
 pub fn write_all(out: &Path, r: &Report) -> anyhow::Result<Vec<String>> {
     let mut names = Vec::new();
+    // Figures drawn without `add` (their names join `names` after it).
+    let mut extra: Vec<String> = Vec::new();
     let mut add =
         |name: String, title: &str, x: &str, y: &str, series: Vec<Series>, marks: Vec<(f64, f64)>| {
             lines(&out.join(&name), title, x, y, &series, &marks)
@@ -98,24 +100,10 @@ pub fn write_all(out: &Path, r: &Report) -> anyhow::Result<Vec<String>> {
             vec![],
         )?;
     }
-    // The extremes.
-    for (name, title, x, pts) in [
-        (
-            "extremes_compliance.svg",
-            "winch: joint error over compliance (x: unstable)",
-            "log10(compliance)",
-            &r.extremes.winch_compliance,
-        ),
-        (
-            "extremes_mass_ratio.svg",
-            "crane: joint error over the load's mass ratio (x: unstable)",
-            "log10(mass ratio)",
-            &r.extremes.crane_mass_ratio,
-        ),
-    ] {
-        let (series, marks) = extreme_series(pts);
-        add(name.into(), title, x, "log10(joint error, m)", series, marks)?;
-    }
+    // The extremes: one figure, a panel per sweep.
+    let name = "extremes.svg";
+    extremes_figure(&out.join(name), r).with_context(|| format!("figure {name}"))?;
+    extra.push(name.to_string());
     // Fig. 4: speed-up over size, one line per tight percentage.
     for (name, title, sizes) in [
         ("fig4_dense.svg", "Fig. 4, dense SPD: deletions over refactor of A_FF", &r.fig4.dense),
@@ -165,12 +153,38 @@ pub fn write_all(out: &Path, r: &Report) -> anyhow::Result<Vec<String>> {
         rapier_figure(&out.join(name), c).with_context(|| format!("figure {name}"))?;
         names.push(name.to_string());
     }
+    names.append(&mut extra);
     for i in &r.islands {
         if let Some(f) = &i.sparsity_figure {
             names.push(f.clone());
         }
     }
     Ok(names)
+}
+
+/// The two extremes sweeps, one panel each: joint error over the swept value per method, red
+/// crosses where a run was unstable.
+fn extremes_figure(path: &Path, r: &Report) -> anyhow::Result<()> {
+    let root = SVGBackend::new(path, (1000, 1100)).into_drawing_area();
+    root.fill(&WHITE).map_err(plot_err)?;
+    let areas = root.split_evenly((2, 1));
+    for (area, (title, x, pts)) in areas.iter().zip([
+        (
+            "winch: joint error over compliance (x: unstable)",
+            "log10(compliance)",
+            &r.extremes.winch_compliance,
+        ),
+        (
+            "crane: joint error over the load's mass ratio (x: unstable)",
+            "log10(mass ratio)",
+            &r.extremes.crane_mass_ratio,
+        ),
+    ]) {
+        let (series, marks) = extreme_series(pts);
+        panel(area, title, 22, (x, "log10(joint error, m)"), &series, &marks, 0.0)?;
+    }
+    root.present().map_err(plot_err)?;
+    Ok(())
 }
 
 fn extreme_series(pts: &[ExtremePoint]) -> (Vec<Series>, Vec<(f64, f64)>) {
