@@ -16,6 +16,7 @@ use pivotsim_server::dynamics::World;
 use pivotsim_server::run::{RunOptions, RunSummary, run_scene_observed};
 use pivotsim_server::scene::{self, SceneOverride};
 use pivotsim_server::solver::Variant;
+use pivotsim_server::solver::pgs::PgsOptions;
 use serde::Serialize;
 
 use super::Plan;
@@ -86,13 +87,14 @@ pub fn run(plan: &Plan, pb: &ProgressBar) -> anyhow::Result<Vec<EqualTime>> {
         let Some((body, what)) = payload(name) else { continue };
         pb.set_message(format!("equal time: {name}, auto"));
         let auto = watched(name, Variant::Auto, None, plan, body)?;
-        pb.set_message(format!("equal time: {name}, pgs 100"));
-        let pgs_default = watched(name, Variant::Pgs, None, plan, body)?;
-        let per_sweep = pgs_default.mean_solve_us / 100.0;
+        let default = PgsOptions::default().max_iterations;
+        pb.set_message(format!("equal time: {name}, pgs {default}"));
+        let pgs_default = watched(name, Variant::Pgs, Some(default), plan, body)?;
+        let per_sweep = pgs_default.mean_solve_us / default as f64;
         let sweeps = if per_sweep > 0.0 && auto.mean_solve_us.is_finite() {
             ((auto.mean_solve_us / per_sweep).round() as usize).clamp(1, 100_000)
         } else {
-            100
+            default
         };
         pb.set_message(format!("equal time: {name}, pgs {sweeps}"));
         let pgs_equal = watched(name, Variant::Pgs, Some(sweeps), plan, body)?;
@@ -139,11 +141,7 @@ fn watched(
             end = Some(Point3::from(p));
         }
     });
-    let method = match sweeps {
-        Some(n) => format!("pgs ({n} sweeps)"),
-        None if v == Variant::Pgs => "pgs (100 sweeps)".into(),
-        None => v.name().to_string(),
-    };
+    let method = sweeps.map_or(v.name().to_string(), |n| format!("{} ({n} sweeps)", v.name()));
     let (moved, lift) = match (end, start) {
         (Some(e), Some(s)) => ((e.coords - s).norm(), e.z - s.z),
         _ => (f64::NAN, f64::NAN),

@@ -72,14 +72,7 @@ impl Plan {
             };
         }
         let all_scenes = vec!["forklift", "winch", "forwarder", "crane", "offshore", "vehicle"];
-        let variants = vec![
-            Variant::Full,
-            Variant::Downdate,
-            Variant::Skyline,
-            Variant::SkylineRefactor,
-            Variant::Incremental,
-            Variant::Auto,
-        ];
+        let variants = Variant::EXACT.to_vec();
         if cfg.quick {
             return Plan {
                 mode: "quick",

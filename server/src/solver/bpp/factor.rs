@@ -37,11 +37,7 @@ impl Solver {
                 // warm-started solve often never does, and its factor cost a whole refactor.
                 if variant == Variant::Skyline {
                     // Timed by the caller, with the rest of the preparation.
-                    self.tmp_tight_clear();
-                    self.stats.regularized +=
-                        self.env.factor_from(&self.ap, &self.tmp_tight, &mut self.l0, 0, self.max_diag);
-                    self.l0_valid = true;
-                    self.stats.l0_factored = true;
+                    self.factor_l0();
                 }
             }
             Variant::Pgs => {}
@@ -52,18 +48,23 @@ impl Solver {
         }
     }
 
-    /// Factors `L₀ = chol(A)` on the envelope unless it is already there.
+    /// Factors `L₀ = chol(A)` on the envelope unless it is already there (timed as factor time).
     pub(super) fn ensure_l0(&mut self) {
         if self.l0_valid {
             return;
         }
         let t = Instant::now();
+        self.factor_l0();
+        self.stats.factor_us += us(t);
+    }
+
+    /// Factors `L₀ = chol(A)` on the envelope (untimed: the caller times it).
+    fn factor_l0(&mut self) {
         self.tmp_tight_clear();
         self.stats.regularized +=
             self.env.factor_from(&self.ap, &self.tmp_tight, &mut self.l0, 0, self.max_diag);
         self.l0_valid = true;
         self.stats.l0_factored = true;
-        self.stats.factor_us += us(t);
     }
 
     pub(super) fn tmp_tight_clear(&mut self) {
