@@ -10,6 +10,7 @@
 //! | `ordering.rs` | Cuthill–McKee / reverse Cuthill–McKee (§3.4), bandwidth and envelope |
 //! | `dense.rs` | dense left-looking Cholesky, row/column deletion, solves (Alg. 1, 2) |
 //! | `envelope.rs` | envelope (skyline) Cholesky, deletion on the skyline, solves (Alg. 3) |
+//! | `envelope_lu.rs` | LU without pivoting on the same envelope (the interior point method's Newton matrix) |
 //! | `bpp/` | block principal pivoting (eq. 4–6): `mod.rs` the driver, `factor.rs` the factor strategies, `safeguard.rs` the active-set and proximal safeguards, `coupled.rs` friction coupling, `safe.rs` safe returned iterates |
 //! | `pgs.rs` | projected Gauss–Seidel baseline |
 //! | `generate.rs` | generated contact-like test problems (tests and `bench-solver`) |
@@ -18,6 +19,7 @@
 mod bpp;
 pub mod dense;
 pub mod envelope;
+pub mod envelope_lu;
 pub mod generate;
 pub mod io;
 pub mod ordering;

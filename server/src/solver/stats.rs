@@ -105,6 +105,13 @@ pub struct SolveStats {
     pub outer_damped: usize,
     /// GMRES iterations of those steps.
     pub krylov_iterations: usize,
+    /// Interior point runs (`bpp/ipm.rs`) in this solve (0 or 1).
+    pub ipm_runs: usize,
+    /// Interior point iterations (each also counted in `pivot_steps`).
+    pub ipm_iterations: usize,
+    /// Friction couplings the interior point method's Newton matrix could not hold (outside the
+    /// envelope of `A`): its directions were inexact there.
+    pub ipm_dropped: usize,
     /// Pivots of the factorization that were non-positive or tiny and were regularized.
     pub regularized: usize,
     /// Row deletions applied (downdate variants).

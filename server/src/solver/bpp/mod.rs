@@ -145,6 +145,7 @@
 
 mod coupled;
 mod factor;
+mod ipm;
 mod safe;
 mod safeguard;
 
@@ -213,6 +214,11 @@ pub struct SolverOptions {
     /// Relative weights of the `auto` cost model: (deleted entry, copied entry, factor multiply–add);
     /// measured on this machine (m = 430, bandwidth 28): 3.0, 0.16 and 1.4 ns per unit.
     pub auto_weights: (f64, f64, f64),
+    /// Pivot steps after which a solve that has not converged switches to the interior point
+    /// method on the coupled problem (`ipm.rs`), once; `usize::MAX`: never.
+    pub ipm_after: usize,
+    /// A cold solve with friction (no warm `λ`) starts with the interior point method.
+    pub ipm_cold: bool,
 }
 
 impl Default for SolverOptions {
@@ -238,6 +244,8 @@ impl Default for SolverOptions {
             polish_above: 1e-3,
             exact_bilateral: true,
             safeguard_after_update: true,
+            ipm_after: usize::MAX,
+            ipm_cold: false,
         }
     }
 }
@@ -353,6 +361,11 @@ pub struct Solver {
     out_of_time: bool,
     /// The deadline of the current solve: `deadline`, or its own budget.
     solve_deadline: Option<Instant>,
+    /// Scratch of the interior point method (`ipm.rs`).
+    ipm: ipm::IpmWork,
+    /// Pivot steps after which this solve switches to the interior point method (`usize::MAX`
+    /// once it has, or never).
+    ipm_at: usize,
 }
 
 impl Solver {
@@ -380,7 +393,7 @@ impl Solver {
 
     /// Whether the solve must stop before another pivot step: the step cap, or the deadline.
     pub(super) fn stop_now(&mut self) -> bool {
-        if self.stats.pivot_steps >= self.opts.max_steps {
+        if self.stats.pivot_steps >= self.opts.max_steps || self.stats.pivot_steps >= self.ipm_at {
             return true;
         }
         if self.solve_deadline.is_some_and(|d| Instant::now() >= d) {
@@ -429,7 +442,17 @@ impl Solver {
         self.stats.factor_us += us(t);
 
         let has_friction = self.fip.iter().any(Option::is_some);
-        let mut converged = self.bpp_loop(variant, has_friction, p.lambda0().is_some() || !has_friction);
+        let warm = p.lambda0().is_some();
+        self.ipm_at = if has_friction && !warm && self.opts.ipm_cold { 0 } else { self.opts.ipm_after };
+        let mut converged = self.bpp_loop(variant, has_friction, warm || !has_friction);
+        if !converged && !self.needs_prox && self.ipm_due() {
+            converged = self.interior_point();
+            if !converged && !self.stop_now() {
+                // Crossover: block pivoting from the index set the interior point identified.
+                converged = self.bpp_loop(variant, has_friction, true);
+            }
+        }
+        self.ipm_at = usize::MAX;
         if self.needs_prox {
             converged = self.proximal_solve(variant, has_friction);
         }
