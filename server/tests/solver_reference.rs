@@ -65,6 +65,41 @@ fn exact_variants_find_an_enumerated_solution_with_friction() {
     assert!(checked >= 20, "only {checked} friction problems checked");
 }
 
+/// The interior point method (`ipm.rs`) on its own — first on cold solves, and switched to at
+/// once on warm ones — lands on an enumerated solution of the friction-coupled problem, with its
+/// iterations counted as pivot steps.
+#[test]
+fn interior_point_finds_an_enumerated_solution_with_friction() {
+    let mut checked = 0;
+    for seed in 100..160 {
+        let n = 3 + (seed as usize % 6);
+        let p = random_problem(n, seed, true, 0.3, 0.5);
+        if !p.has_friction() {
+            continue;
+        }
+        let sols = enumerate_solutions(&p, 1e-9);
+        if sols.is_empty() {
+            continue;
+        }
+        let warm = p.clone().with_warm_start(Some(vec![0.0; n]), None).unwrap();
+        for (kind, q, opts) in [
+            ("cold", &p, SolverOptions { ipm_cold: true, max_steps: 1000, ..Default::default() }),
+            ("warm", &warm, SolverOptions { ipm_after: 0, max_steps: 1000, ..Default::default() }),
+        ] {
+            let mut s = Solver::new(opts);
+            let mut lam = vec![0.0; n];
+            let st = s.solve(q, &mut lam).clone();
+            assert_eq!(st.ipm_runs, 1, "seed {seed} {kind}: the interior point method did not run");
+            assert!(st.ipm_iterations >= 1 && st.pivot_steps >= st.ipm_iterations, "seed {seed} {kind}");
+            assert_eq!(st.status, SolveStatus::Converged, "seed {seed} {kind}: residual {}", st.residual_rel);
+            let nearest = sols.iter().map(|s| max_diff(&lam, &s.lambda)).fold(f64::INFINITY, f64::min);
+            assert!(nearest < 1e-7, "seed {seed} {kind}: no enumerated solution within {nearest}");
+        }
+        checked += 1;
+    }
+    assert!(checked >= 20, "only {checked} friction problems checked");
+}
+
 #[test]
 fn variants_agree_on_random_spd_problems_up_to_1000() {
     for (n, seed) in [(50, 1), (200, 2), (500, 3), (1000, 4)] {
@@ -259,9 +294,13 @@ fn auto_factors_l0_only_when_it_deletes_from_it() {
     let mut checked = 0;
     for seed in 0..12 {
         let mut p = pivotsim_server::solver::generate::contact_like(200, seed, 1e3);
-        let (lam, _) = solve(&p, Variant::Skyline, 1000);
-        let mut s =
-            Solver::new(SolverOptions { variant: Variant::Skyline, max_steps: 1000, ..Default::default() });
+        // The reference solve pivots alone: its answer is a vertex of the pivoting (an interior
+        // point answer that its crossover did not turn into one is a poorer warm start).
+        let pivoting = SolverOptions { variant: Variant::Skyline, max_steps: 1000, ipm_cold: false, ..Default::default() };
+        let mut s = Solver::new(pivoting);
+        let mut lam = vec![0.0; p.n()];
+        s.solve(&p, &mut lam);
+        let mut s = Solver::new(pivoting);
         let mut l = vec![0.0; p.n()];
         s.solve(&p, &mut l);
         let index = s.index_set().to_vec();

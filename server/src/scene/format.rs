@@ -56,6 +56,8 @@ pub(crate) struct SceneSection {
     pub newton_first: Option<bool>,
     pub safeguard_after_update: Option<bool>,
     pub murty_after: Option<usize>,
+    pub ipm_after: Option<usize>,
+    pub ipm_cold: Option<bool>,
     pub polish_sweeps: Option<usize>,
     pub pgs_sweeps: Option<usize>,
     pub exact_bilateral: Option<bool>,

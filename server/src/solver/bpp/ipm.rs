@@ -39,6 +39,10 @@ use super::{Solver, resize};
 
 /// Iterations without halving the best residual after which the method gives up.
 const IPM_PATIENCE: usize = 8;
+/// Pivot steps from a converged interior point's index set to its exact solution.
+const CROSSOVER_STEPS: usize = 3;
+/// A run that stopped short hands its index set to the pivoting only below this residual.
+const CROSSOVER_BELOW: f64 = 1e-6;
 /// Fraction of the step to the boundary.
 const TO_BOUNDARY: f64 = 0.995;
 
@@ -57,6 +61,51 @@ pub(super) enum RowKind {
 }
 
 impl Solver {
+    /// The interior point method, then block pivoting from the index set it identified:
+    /// - converged: at most `CROSSOVER_STEPS` pivot steps to the exact solution of that index set
+    ///   (a vertex answer, and a warm start the next step can reuse in one step); when they do not
+    ///   converge, the interior point's own answer stands;
+    /// - not converged but within `CROSSOVER_BELOW`: pivoting from its index set for the steps left;
+    /// - else pivoting resumes from the index set it had before the switch.
+    pub(super) fn interior_point_with_crossover(&mut self, variant: super::Variant, friction: bool) -> bool {
+        let m = self.ap.n();
+        self.ipm_state.clear();
+        self.ipm_state.extend_from_slice(&self.state);
+        let converged = self.interior_point();
+        if converged {
+            self.ipm_state.clear();
+            self.ipm_state.extend_from_slice(&self.state);
+            resize(&mut self.ipm_lam, m);
+            self.ipm_lam.copy_from_slice(&self.lam);
+            self.ipm_at = self.stats.pivot_steps + CROSSOVER_STEPS;
+            let exact = !self.stop_now() && self.bpp_loop(variant, friction, true);
+            self.ipm_at = usize::MAX;
+            if !exact {
+                self.lam.copy_from_slice(&self.ipm_lam);
+                self.state.copy_from_slice(&self.ipm_state);
+                for i in 0..m {
+                    self.tight[i] = self.state[i].is_tight();
+                }
+                self.update_bounds();
+                self.compute_w();
+                self.l_valid = false;
+            }
+            return true;
+        }
+        if self.stop_now() {
+            return false;
+        }
+        if self.ipm.best > CROSSOVER_BELOW {
+            // Far from a solution: its index set says little; back to where the pivoting was.
+            self.state.copy_from_slice(&self.ipm_state);
+            for i in 0..m {
+                self.tight[i] = self.state[i].is_tight();
+            }
+            self.l_valid = false;
+        }
+        self.bpp_loop(variant, friction, true)
+    }
+
     /// Runs the interior point method from scratch on the current (permuted) problem, each
     /// iteration a counted pivot step. Returns whether it converged; `λ`, `w`, the index set it
     /// identifies and the frozen bounds hold its last iterate either way.
@@ -67,6 +116,7 @@ impl Solver {
             return false;
         }
         self.stats.ipm_runs += 1;
+        self.ipm.best = f64::INFINITY;
         let mut best = f64::INFINITY;
         let mut since_best = 0;
         loop {
@@ -83,6 +133,7 @@ impl Solver {
                 self.ipm_finish();
                 return true;
             }
+            self.ipm.best = self.ipm.best.min(rr);
             if rr < 0.5 * best {
                 best = rr;
                 since_best = 0;
@@ -389,4 +440,6 @@ pub(super) struct IpmWork {
     aff_l: Vec<f64>,
     aff_u: Vec<f64>,
     ratio: Vec<f64>,
+    /// Smallest relative residual of this run's iterates.
+    best: f64,
 }

@@ -245,7 +245,7 @@ impl Default for SolverOptions {
             exact_bilateral: true,
             safeguard_after_update: true,
             ipm_after: usize::MAX,
-            ipm_cold: false,
+            ipm_cold: true,
         }
     }
 }
@@ -366,6 +366,9 @@ pub struct Solver {
     /// Pivot steps after which this solve switches to the interior point method (`usize::MAX`
     /// once it has, or never).
     ipm_at: usize,
+    /// The index set and `λ` the interior point method started from or converged to (`ipm.rs`).
+    ipm_state: Vec<IndexState>,
+    ipm_lam: Vec<f64>,
 }
 
 impl Solver {
@@ -446,11 +449,7 @@ impl Solver {
         self.ipm_at = if has_friction && !warm && self.opts.ipm_cold { 0 } else { self.opts.ipm_after };
         let mut converged = self.bpp_loop(variant, has_friction, warm || !has_friction);
         if !converged && !self.needs_prox && self.ipm_due() {
-            converged = self.interior_point();
-            if !converged && !self.stop_now() {
-                // Crossover: block pivoting from the index set the interior point identified.
-                converged = self.bpp_loop(variant, has_friction, true);
-            }
+            converged = self.interior_point_with_crossover(variant, has_friction);
         }
         self.ipm_at = usize::MAX;
         if self.needs_prox {
