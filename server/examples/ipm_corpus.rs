@@ -42,7 +42,7 @@ fn main() {
 }
 
 fn run(p: &Mlcp, after: usize, cap: usize) -> (usize, bool, usize, f64, f64) {
-    let opts = SolverOptions { variant: Variant::Auto, max_steps: cap, ipm_after: after, ipm_cold: std::env::var("IPM_COLD").map_or(true, |v| v == "1"), ..SolverOptions::default() };
+    let opts = SolverOptions { variant: Variant::Auto, max_steps: cap, ipm_after: after, ipm_cold_after: std::env::var("IPM_COLD").ok().and_then(|v| v.parse().ok()).unwrap_or(3), ..SolverOptions::default() };
     let mut s = Solver::new(opts);
     let mut lam = vec![0.0; p.n()];
     let st = s.solve(p, &mut lam);

@@ -83,7 +83,7 @@ fn interior_point_finds_an_enumerated_solution_with_friction() {
         }
         let warm = p.clone().with_warm_start(Some(vec![0.0; n]), None).unwrap();
         for (kind, q, opts) in [
-            ("cold", &p, SolverOptions { ipm_cold: true, max_steps: 1000, ..Default::default() }),
+            ("cold", &p, SolverOptions { ipm_cold_after: 0, max_steps: 1000, ..Default::default() }),
             ("warm", &warm, SolverOptions { ipm_after: 0, max_steps: 1000, ..Default::default() }),
         ] {
             let mut s = Solver::new(opts);
@@ -296,7 +296,7 @@ fn auto_factors_l0_only_when_it_deletes_from_it() {
         let mut p = pivotsim_server::solver::generate::contact_like(200, seed, 1e3);
         // The reference solve pivots alone: its answer is a vertex of the pivoting (an interior
         // point answer that its crossover did not turn into one is a poorer warm start).
-        let pivoting = SolverOptions { variant: Variant::Skyline, max_steps: 1000, ipm_cold: false, ..Default::default() };
+        let pivoting = SolverOptions { variant: Variant::Skyline, max_steps: 1000, ipm_cold_after: usize::MAX, ..Default::default() };
         let mut s = Solver::new(pivoting);
         let mut lam = vec![0.0; p.n()];
         s.solve(&p, &mut lam);

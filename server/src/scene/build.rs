@@ -659,8 +659,8 @@ impl<'a> Builder<'a> {
         if let Some(n) = sec.ipm_after {
             settings.solver.ipm_after = n;
         }
-        if let Some(b) = sec.ipm_cold {
-            settings.solver.ipm_cold = b;
+        if let Some(n) = sec.ipm_cold_after {
+            settings.solver.ipm_cold_after = n;
         }
         if let Some(n) = sec.polish_sweeps {
             settings.solver.polish_sweeps = n;

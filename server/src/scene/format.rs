@@ -57,7 +57,7 @@ pub(crate) struct SceneSection {
     pub safeguard_after_update: Option<bool>,
     pub murty_after: Option<usize>,
     pub ipm_after: Option<usize>,
-    pub ipm_cold: Option<bool>,
+    pub ipm_cold_after: Option<usize>,
     pub polish_sweeps: Option<usize>,
     pub pgs_sweeps: Option<usize>,
     pub exact_bilateral: Option<bool>,

@@ -71,15 +71,21 @@ impl Solver {
         let m = self.ap.n();
         self.ipm_state.clear();
         self.ipm_state.extend_from_slice(&self.state);
+        resize(&mut self.ipm_lam, m);
+        self.ipm_lam.copy_from_slice(&self.lam);
         let converged = self.interior_point();
         if converged {
             self.ipm_state.clear();
             self.ipm_state.extend_from_slice(&self.state);
-            resize(&mut self.ipm_lam, m);
             self.ipm_lam.copy_from_slice(&self.lam);
             self.ipm_at = self.stats.pivot_steps + CROSSOVER_STEPS;
-            let exact = !self.stop_now() && self.bpp_loop(variant, friction, true);
+            let mut exact = !self.stop_now() && self.bpp_loop(variant, friction, true);
             self.ipm_at = usize::MAX;
+            if exact {
+                // The pivoting's answer must meet the tolerance the interior point's did.
+                let (res, rr) = super::super::natural_residual(&self.lam, &self.w, &self.lop, &self.hip, &self.fip);
+                exact = rr <= self.opts.tol_rel || res == 0.0;
+            }
             if !exact {
                 self.lam.copy_from_slice(&self.ipm_lam);
                 self.state.copy_from_slice(&self.ipm_state);
@@ -98,9 +104,11 @@ impl Solver {
         if self.ipm.best > CROSSOVER_BELOW {
             // Far from a solution: its index set says little; back to where the pivoting was.
             self.state.copy_from_slice(&self.ipm_state);
+            self.lam.copy_from_slice(&self.ipm_lam);
             for i in 0..m {
                 self.tight[i] = self.state[i].is_tight();
             }
+            self.compute_w();
             self.l_valid = false;
         }
         self.bpp_loop(variant, friction, true)

@@ -217,8 +217,9 @@ pub struct SolverOptions {
     /// Pivot steps after which a solve that has not converged switches to the interior point
     /// method on the coupled problem (`ipm.rs`), once; `usize::MAX`: never.
     pub ipm_after: usize,
-    /// A cold solve with friction (no warm `λ`) starts with the interior point method.
-    pub ipm_cold: bool,
+    /// The same switch for a cold solve with friction (no warm `λ`): after this many pivot steps
+    /// (default 3: easy problems finish before it; measured in `ipm.rs`); `usize::MAX`: never.
+    pub ipm_cold_after: usize,
 }
 
 impl Default for SolverOptions {
@@ -245,7 +246,7 @@ impl Default for SolverOptions {
             exact_bilateral: true,
             safeguard_after_update: true,
             ipm_after: usize::MAX,
-            ipm_cold: true,
+            ipm_cold_after: 3,
         }
     }
 }
@@ -446,7 +447,8 @@ impl Solver {
 
         let has_friction = self.fip.iter().any(Option::is_some);
         let warm = p.lambda0().is_some();
-        self.ipm_at = if has_friction && !warm && self.opts.ipm_cold { 0 } else { self.opts.ipm_after };
+        self.ipm_at =
+            if has_friction && !warm { self.opts.ipm_cold_after.min(self.opts.ipm_after) } else { self.opts.ipm_after };
         let mut converged = self.bpp_loop(variant, has_friction, warm || !has_friction);
         if !converged && !self.needs_prox && self.ipm_due() {
             converged = self.interior_point_with_crossover(variant, has_friction);
