@@ -19,7 +19,16 @@ fn solve_json_has_the_documented_keys_and_writes_the_solution() {
     let out = bin()
         // Cold, this island needs 34 pivot steps from all-free and 64 from the interior point start:
         // a cap above both, so the test is about the output, not the start.
-        .args(["solve", example().to_str().unwrap(), "--variant", "auto", "--max-steps", "200", "--json", "--solution"])
+        .args([
+            "solve",
+            example().to_str().unwrap(),
+            "--variant",
+            "auto",
+            "--max-steps",
+            "200",
+            "--json",
+            "--solution",
+        ])
         .arg(&sol)
         .output()
         .unwrap();

@@ -296,7 +296,12 @@ fn auto_factors_l0_only_when_it_deletes_from_it() {
         let mut p = pivotsim_server::solver::generate::contact_like(200, seed, 1e3);
         // The reference solve pivots alone: its answer is a vertex of the pivoting (an interior
         // point answer that its crossover did not turn into one is a poorer warm start).
-        let pivoting = SolverOptions { variant: Variant::Skyline, max_steps: 1000, ipm_cold_after: usize::MAX, ..Default::default() };
+        let pivoting = SolverOptions {
+            variant: Variant::Skyline,
+            max_steps: 1000,
+            ipm_cold_after: usize::MAX,
+            ..Default::default()
+        };
         let mut s = Solver::new(pivoting);
         let mut lam = vec![0.0; p.n()];
         s.solve(&p, &mut lam);

@@ -12,9 +12,11 @@
 //! L[j.., k]) / U[j,j]`, the sums over `k = g_j .. j−1` as contiguous axpys over column `k`'s rows
 //! `j ..= s_k` (twice the work of the Cholesky of the same envelope).
 //!
-//! **Why no pivoting is safe enough here**: `K = S + C` with `S = A + diag(d)` symmetric positive
-//! definite and `|C[i, c_i]| ≤ μ d_i ≤ μ S_ii`; a pivot that is not finite or not positive is
-//! reported (the caller then drops the coupling for that step: an inexact Newton direction).
+//! **No row exchanges** (they would leave the envelope): `K = S + C` with `S = A + diag(d)`
+//! symmetric positive definite and `|C[i, c_i]| ≤ μ d_i`; pivots may turn negative (measured on
+//! the corpus: requiring positive ones broke 20 of 30 runs) and are accepted unless they vanish
+//! against their row's diagonal (`PIVOT_FLOOR`) or are not finite — then a typed error, and the
+//! interior point method stops (no silent garbage).
 
 use super::SymCsr;
 use super::envelope::Envelope;
@@ -182,8 +184,17 @@ mod tests {
         let mut env = Envelope::new();
         env.build(&a);
         let d: Vec<f64> = (0..m).map(|i| 0.5 + (i % 3) as f64).collect();
-        let cpl: Vec<Option<usize>> =
-            (0..m).map(|i| if i % 3 == 1 { Some(i - 1) } else if i % 3 == 2 { Some(i - 2) } else { None }).collect();
+        let cpl: Vec<Option<usize>> = (0..m)
+            .map(|i| {
+                if i % 3 == 1 {
+                    Some(i - 1)
+                } else if i % 3 == 2 {
+                    Some(i - 2)
+                } else {
+                    None
+                }
+            })
+            .collect();
         let cv: Vec<f64> = (0..m).map(|i| 0.7 * d[i] * if i % 2 == 0 { 1.0 } else { -1.0 }).collect();
         let mut k = DMatrix::from_row_slice(m, m, &dense);
         for i in 0..m {

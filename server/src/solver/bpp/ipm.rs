@@ -27,11 +27,33 @@
 //! is within the solve's tolerance (the pivoting's criterion); the index set returned is the one
 //! the iterate identifies (`s_k < z_k`: tight). Every iterate is strictly feasible — inside each
 //! box and each friction cone — so a capped IPM iterate is a safe answer by construction.
-//! Measured on the corpus (cold, the 30 hardest islands of the scenes, dense prototype): the
-//! residual falls below 1e-10 within 12–22 iterations on all forklift and shipped winch files and
-//! on four of six forwarder files, where the pivoting needs 20–300 steps; it stalls at 1e-4 on the
-//! forwarder's grasp with 42 redundant teeth (`hard00`, `hard02`) and wanders on three of the
-//! winch's sliding chains at contact compliance 1e-10.
+//!
+//! **Measured** (session of 2026-12-02, `server/tests/data/corpus`, the 30 hardest islands of the
+//! scenes, `auto`, release). The method alone, cold: the residual falls below 1e-9 within 12–22
+//! iterations on all forklift and shipped-winch files and on four of six forwarder files, where the
+//! pivoting needs 20–300 steps (`forklift-c1e-10-hard02` 267 → 12, `forwarder-hard04` 300+ → 9);
+//! it stalls at 1e-4 on the forwarder's grasp with 42 redundant teeth (`hard00`, `hard02`) and
+//! wanders on the winch's sliding chains at contact compliance 1e-10 (then the crossover from its
+//! index set finishes `hard01`/`hard02` in 26–29 steps). Files within 35 / 100 steps:
+//!
+//! | start | warm ≤ 35 | warm ≤ 100 | cold ≤ 35 | cold ≤ 100 | cold, total time |
+//! |---|---|---|---|---|---|
+//! | pivoting alone (earlier defaults) | 15 | 22 | 11 | 21 | 266 ms |
+//! | switch after 3 steps, cold only (`ipm_cold_after = 3`, the default) | 15 | 22 | 25 | 26 | 105 ms |
+//! | switch after 3 steps, every solve (`ipm_after = 3`) | 25 | 28 | 25 | 26 | 105 ms |
+//!
+//! Switching at once (`0`) costs the problems the pivoting finishes in 2 steps (a Siconos box
+//! stack: 29 iterations to 7e-9) and a generated crane island (34 → 64 steps): hence after 3.
+//! The Newton matrix is not symmetric; a first version that refused non-positive pivots of its
+//! LU broke down on 20 of 30 files, and GMRES preconditioned by `chol(A + D)` needed 4–60
+//! iterations per direction (125–4,000 per solve): the envelope LU is one factorization.
+//!
+//! **In simulation** (20 s, cap 35, `auto`) cold solves with friction do not occur (warm starts
+//! carry every island), so the default changes no trajectory. Switching every solve after `k`
+//! steps (`ipm_after`) is mixed, hence a scene setting, off by default: winch at contact
+//! compliance 1e-10 31 capped solves → 19 (k = 0), 22 (3), 26 (6); vehicle at 1e-10 1 → 0 (k = 3,
+//! mean solve 3× longer), 2 (10); forklift at 1e-10 9 → 8–9; but the forwarder 8 → 16–29: its
+//! grasp is where the method stalls, and the steps it spends are missing from the pivoting.
 
 use super::super::IndexState;
 use super::super::envelope_lu::LuError;
@@ -83,7 +105,8 @@ impl Solver {
             self.ipm_at = usize::MAX;
             if exact {
                 // The pivoting's answer must meet the tolerance the interior point's did.
-                let (res, rr) = super::super::natural_residual(&self.lam, &self.w, &self.lop, &self.hip, &self.fip);
+                let (res, rr) =
+                    super::super::natural_residual(&self.lam, &self.w, &self.lop, &self.hip, &self.fip);
                 exact = rr <= self.opts.tol_rel || res == 0.0;
             }
             if !exact {
@@ -129,10 +152,8 @@ impl Solver {
         let mut since_best = 0;
         loop {
             self.compute_w();
-            let (res, rr) = super::super::natural_residual(&self.lam, &self.w, &self.lop, &self.hip, &self.fip);
-            if std::env::var("IPM_DEBUG").is_ok() {
-                eprintln!("ipm: rr {rr:e}");
-            }
+            let (res, rr) =
+                super::super::natural_residual(&self.lam, &self.w, &self.lop, &self.hip, &self.fip);
             if !rr.is_finite() {
                 break;
             }
@@ -202,7 +223,9 @@ impl Solver {
         for v in [&mut ws.zl, &mut ws.zu, &mut ws.sl, &mut ws.su, &mut ws.d, &mut ws.cv] {
             resize(v, m);
         }
-        for v in [&mut ws.dlam, &mut ws.dsl, &mut ws.dsu, &mut ws.dzl, &mut ws.dzu, &mut ws.aff_l, &mut ws.aff_u] {
+        for v in
+            [&mut ws.dlam, &mut ws.dsl, &mut ws.dsu, &mut ws.dzl, &mut ws.dzu, &mut ws.aff_l, &mut ws.aff_u]
+        {
             resize(v, m);
         }
         ws.cpl.clear();
@@ -280,12 +303,7 @@ impl Solver {
                     ws.cpl[row] = None;
                     self.stats.ipm_dropped += 1;
                 }
-                Err(LuError::Pivot { row, value }) => {
-                    if std::env::var("IPM_DEBUG").is_ok() {
-                        eprintln!("ipm: pivot {row} = {value:e}, mu {mu:e}");
-                    }
-                    return false;
-                }
+                Err(LuError::Pivot { .. }) => return false,
             }
         }
         // Predictor (τ = 0), then the corrector with Mehrotra's centring and second-order term.
@@ -308,10 +326,7 @@ impl Solver {
         let mu_aff = gap_aff / pairs.max(1) as f64;
         let sigma = if mu > 0.0 { (mu_aff / mu).powi(3).min(1.0) } else { 0.0 };
         let alpha = (TO_BOUNDARY * self.ipm_direction(m, Some(sigma * mu))).min(1.0);
-        if !(alpha > 0.0) {
-            if std::env::var("IPM_DEBUG").is_ok() {
-                eprintln!("ipm: alpha {alpha:e}");
-            }
+        if alpha.is_nan() || alpha <= 0.0 {
             return false;
         }
         let ws = &mut self.ipm;

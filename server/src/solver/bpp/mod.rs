@@ -128,6 +128,15 @@
 //! step. Every iterate is judged by the natural-map residual against the bounds at its own normal
 //! impulses.
 //!
+//! **Interior point switch** (`ipm.rs`, [`SolverOptions::ipm_cold_after`], [`SolverOptions::ipm_after`]):
+//! a solve that has not converged after a few pivot steps runs Mehrotra's predictor–corrector on
+//! the friction-coupled problem itself (bounds `±μ λ_n` as constraints, one envelope LU per
+//! iteration, each counted as a pivot step), then crosses over to the exact solution of the index
+//! set it identifies. Redundant contact sets and friction that cycles — what makes the corpus
+//! hard — cost it nothing special: 12–22 iterations where pivoting needs up to 300. On by default
+//! for cold solves (corpus cold within 35 steps 11 → 25 of 30); for warm ones a scene setting
+//! (measured mixed in simulation, see `ipm.rs`).
+//!
 //! **Semidefinite `A`.** When the factorization has to regularize pivots, the solve switches to
 //! proximal point iterations on `A + ρI` (`safeguard.rs`), judged against the original problem.
 //!
@@ -447,8 +456,11 @@ impl Solver {
 
         let has_friction = self.fip.iter().any(Option::is_some);
         let warm = p.lambda0().is_some();
-        self.ipm_at =
-            if has_friction && !warm { self.opts.ipm_cold_after.min(self.opts.ipm_after) } else { self.opts.ipm_after };
+        self.ipm_at = if has_friction && !warm {
+            self.opts.ipm_cold_after.min(self.opts.ipm_after)
+        } else {
+            self.opts.ipm_after
+        };
         let mut converged = self.bpp_loop(variant, has_friction, warm || !has_friction);
         if !converged && !self.needs_prox && self.ipm_due() {
             converged = self.interior_point_with_crossover(variant, has_friction);
