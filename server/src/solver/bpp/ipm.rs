@@ -54,6 +54,13 @@
 //! compliance 1e-10 31 capped solves → 19 (k = 0), 22 (3), 26 (6); vehicle at 1e-10 1 → 0 (k = 3,
 //! mean solve 3× longer), 2 (10); forklift at 1e-10 9 → 8–9; but the forwarder 8 → 16–29: its
 //! grasp is where the method stalls, and the steps it spends are missing from the pivoting.
+//! Switching only once the outer friction iteration has begun (after 3 steps and 1 or 3 bound
+//! updates) was worse: forklift at 1e-10 743 capped solves (a cascade), forwarder 75–124.
+//! Why the grasp stalls (measured on `forwarder-hard00`): the steps collapse to `α ≈ 1e-5…1e-10`
+//! blocked by one friction row of a redundant tooth whose Newton direction is `‖Δλ‖ ≈ 5e6` — the
+//! flat valley of redundant contacts (smallest eigenvalue `c/h²`), interior there, so `D ≈ 0`
+//! does not regularize it; a proximal term `δ A_ii` (δ = 1e-8…1e-4) and iterative refinement of
+//! the directions changed nothing or made it worse.
 
 use super::super::IndexState;
 use super::super::envelope_lu::LuError;
