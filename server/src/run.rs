@@ -121,7 +121,8 @@ pub struct RunSummary {
     pub mean_island_solve_us: f64,
     /// Largest wall time of one island solve (µs).
     pub max_island_solve_us: f64,
-    /// Island solves in which a safeguard (projected Newton, Murty, semismooth Newton) ran.
+    /// Island solves in which a safeguard (projected Newton, Murty, semismooth Newton, the interior
+    /// point method) ran.
     pub solves_fallback: u64,
     /// Island solves stopped by the time budget (`max_solve_us`).
     pub solves_budget: u64,

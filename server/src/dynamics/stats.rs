@@ -19,7 +19,7 @@ pub struct IslandStats {
     pub variant: Variant,
     /// How the solve ended.
     pub status: SolveStatus,
-    /// Whether a fallback (projected Newton, Murty, semismooth Newton) ran ([`SolveStats::fallback`](crate::solver::SolveStats::fallback)).
+    /// Whether a fallback (projected Newton, Murty, semismooth Newton, interior point) ran ([`SolveStats::fallback`](crate::solver::SolveStats::fallback)).
     pub fallback: bool,
     /// Pivot steps (exact variants).
     pub pivot_steps: usize,

@@ -70,7 +70,7 @@ pub struct SolveStats {
     pub tight_per_step: Vec<u32>,
     /// Tight count of the returned solution.
     pub tight: usize,
-    /// Whether a fallback (Murty or projected Newton) ran.
+    /// Whether a fallback (Murty, projected Newton, semismooth Newton, the interior point method) ran.
     pub fallback: bool,
     /// The returned iterate had positive merit (it would have added energy) and was scaled
     /// towards zero (`safe.rs`); only ever on a solve that did not converge.

@@ -154,6 +154,7 @@ impl Solver {
             return false;
         }
         self.stats.ipm_runs += 1;
+        self.stats.fallback = true;
         self.ipm.best = f64::INFINITY;
         let mut best = f64::INFINITY;
         let mut since_best = 0;
