@@ -6,7 +6,7 @@
 mod common;
 
 use common::{banded_problem, random_problem};
-use pivotsim_server::solver::reference::enumerate_solutions;
+use pivotsim_server::solver::reference::{Enumerated, enumerate_solutions};
 use pivotsim_server::solver::{Mlcp, OrderingKind, SolveStatus, Solver, SolverOptions, Variant};
 use proptest::prelude::*;
 
@@ -40,9 +40,9 @@ fn exact_variants_match_enumeration_without_friction() {
     }
 }
 
-#[test]
-fn exact_variants_find_an_enumerated_solution_with_friction() {
-    let mut checked = 0;
+/// Small random problems with friction and their enumerated solutions (seed, problem, solutions).
+fn friction_problems() -> Vec<(u64, Mlcp, Vec<Enumerated>)> {
+    let mut out = Vec::new();
     for seed in 100..160 {
         let n = 3 + (seed as usize % 6);
         let p = random_problem(n, seed, true, 0.3, 0.5);
@@ -50,9 +50,17 @@ fn exact_variants_find_an_enumerated_solution_with_friction() {
             continue;
         }
         let sols = enumerate_solutions(&p, 1e-9);
-        if sols.is_empty() {
-            continue;
+        if !sols.is_empty() {
+            out.push((seed, p, sols));
         }
+    }
+    out
+}
+
+#[test]
+fn exact_variants_find_an_enumerated_solution_with_friction() {
+    let mut checked = 0;
+    for (seed, p, sols) in friction_problems() {
         for v in Variant::EXACT {
             let (lam, st) = solve(&p, v, 1000);
             assert_eq!(st.status, SolveStatus::Converged, "seed {seed} {v} residual {}", st.residual_rel);
@@ -71,16 +79,8 @@ fn exact_variants_find_an_enumerated_solution_with_friction() {
 #[test]
 fn interior_point_finds_an_enumerated_solution_with_friction() {
     let mut checked = 0;
-    for seed in 100..160 {
-        let n = 3 + (seed as usize % 6);
-        let p = random_problem(n, seed, true, 0.3, 0.5);
-        if !p.has_friction() {
-            continue;
-        }
-        let sols = enumerate_solutions(&p, 1e-9);
-        if sols.is_empty() {
-            continue;
-        }
+    for (seed, p, sols) in friction_problems() {
+        let n = p.n();
         let warm = p.clone().with_warm_start(Some(vec![0.0; n]), None).unwrap();
         for (kind, q, opts) in [
             ("cold", &p, SolverOptions { ipm_cold_after: 0, max_steps: 1000, ..Default::default() }),

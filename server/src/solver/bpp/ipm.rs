@@ -375,18 +375,16 @@ impl Solver {
             let (has_l, has_u) = ws.kind[i].sides();
             let (dsl, dsu) = ws.kind[i].slack_steps(&ws.dlam, i, self.lop[i], self.hip[i]);
             if has_l {
-                let dz = (tau(ws.aff_l[i]) - ws.sl[i] * ws.zl[i] - ws.zl[i] * dsl) / ws.sl[i];
-                ws.dsl[i] = dsl;
-                ws.dzl[i] = dz;
-                alpha = alpha.min(step_to_zero(ws.sl[i], dsl)).min(step_to_zero(ws.zl[i], dz));
+                let (dz, a) = side_step(tau(ws.aff_l[i]), ws.sl[i], ws.zl[i], dsl);
+                (ws.dsl[i], ws.dzl[i]) = (dsl, dz);
+                alpha = alpha.min(a);
             } else {
                 ws.dzl[i] = 0.0;
             }
             if has_u {
-                let dz = (tau(ws.aff_u[i]) - ws.su[i] * ws.zu[i] - ws.zu[i] * dsu) / ws.su[i];
-                ws.dsu[i] = dsu;
-                ws.dzu[i] = dz;
-                alpha = alpha.min(step_to_zero(ws.su[i], dsu)).min(step_to_zero(ws.zu[i], dz));
+                let (dz, a) = side_step(tau(ws.aff_u[i]), ws.su[i], ws.zu[i], dsu);
+                (ws.dsu[i], ws.dzu[i]) = (dsu, dz);
+                alpha = alpha.min(a);
             } else {
                 ws.dzu[i] = 0.0;
             }
@@ -443,6 +441,13 @@ impl RowKind {
             _ => (d[i], -d[i]),
         }
     }
+}
+
+/// One constraint's multiplier step `Δz = (τ − s z − z Δs) / s` for the slack step `Δs`, and the
+/// largest step length that keeps `s` and `z` non-negative.
+fn side_step(tau: f64, s: f64, z: f64, ds: f64) -> (f64, f64) {
+    let dz = (tau - s * z - z * ds) / s;
+    (dz, step_to_zero(s, ds).min(step_to_zero(z, dz)))
 }
 
 /// Largest `t ≥ 0` with `x + t dx ≥ 0` (∞ when `dx ≥ 0`).
