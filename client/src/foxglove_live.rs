@@ -144,12 +144,15 @@ impl View<'_> {
         }
         let scene = topics::encode(&shapes.update);
         let description = serde_json::to_vec(&s)?;
+        // Broadcast and latch under the lock that `on_subscribe` takes: a client that subscribes
+        // meanwhile gets the old scene before the new one or the new one only, never new then old.
         let meta = PartialMetadata::with_log_time(now);
+        let mut latched = self.latched.lock().unwrap_or_else(|e| e.into_inner());
         self.ch.scene.log_with_meta(&scene, meta);
         self.ch.description.log_with_meta(&description, meta);
+        *latched = Latched { scene: Some(scene), description: Some(description) };
+        drop(latched);
         eprintln!("pivotsim-client: scene `{}`: {} bodies as scene entities", s.scene, s.bodies.len());
-        *self.latched.lock().unwrap_or_else(|e| e.into_inner()) =
-            Latched { scene: Some(scene), description: Some(description) };
         self.scene = Some(s);
         self.n.scenes += 1;
         Ok(())

@@ -10,8 +10,8 @@
 //!
 //! The forklift is served paused, the view connects and subscribes after the scene was published
 //! (so its entities arrive only through the late-joiner path), then the server resumes and the
-//! scripted operator drives the truck forward: the chassis' transform must move. Every wait is
-//! bounded in time.
+//! scripted operator drives the truck forward: the chassis' transform must move. A reset then
+//! brings the scene again (new entities) and the chassis back. Every wait is bounded in time.
 
 mod common;
 
@@ -287,6 +287,27 @@ fn foxglove_view_streams_the_forklift_moving() {
     assert!(chassis.2, "frame-locked");
     assert!(chassis.3 >= 1, "the chassis has primitives");
     assert!(scene_entities.len() > 10, "{} entities", scene_entities.len());
+    // A reset (simulation time back to 0) makes the view send the scene again, and the chassis
+    // returns to its start.
+    let (session, _) = s.connect();
+    let reply = s.control(&session, 2, pivotsim_msgs::ControlCommand::Reset);
+    assert!(matches!(reply.outcome, pivotsim_msgs::ControlOutcome::Ok(_)), "{reply:?}");
+    let deadline = Instant::now() + Duration::from_secs(20);
+    let (mut rescene, mut back) = (false, false);
+    while !(rescene && back) {
+        assert!(Instant::now() < deadline, "after the reset: scene again {rescene}, chassis back {back}");
+        let Some(Message::Binary(b)) = next(&mut ws) else { continue };
+        let (sub, _, payload) = message_data(&b);
+        match sub {
+            10 => {
+                let t = transforms(payload);
+                let (_, _, p) = t.iter().find(|(_, child, _)| child == "chassis").unwrap();
+                back |= (p[0] - first.unwrap()[0]).abs() < 1e-9;
+            }
+            11 => rescene |= entities(payload).len() == scene_entities.len(),
+            _ => {}
+        }
+    }
     drop(ws);
     view.interrupt();
     let out = view.wait().ok();
