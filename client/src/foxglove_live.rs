@@ -11,7 +11,8 @@
 //! (`/pivotsim/description`) are sent once per scene to everyone subscribed, and again to each
 //! client that subscribes later (a late joiner), to that client only. A new scene (the server's
 //! `control load` or `reset`: the simulation time goes back, or the pose frames' body count no
-//! longer matches) is asked again, at most once a second, and replaces the entities.
+//! longer matches) is asked again and replaces the entities; unanswered asks back off from 1 s to
+//! 32 s.
 //!
 //! Message timestamps: the server's wall time (`wall_time_ns`) for transforms and poses, the
 //! receive time for stats.
@@ -130,6 +131,9 @@ struct View<'a> {
     scene: Option<msgs::SceneDescription>,
     last_sim_time: f64,
     last_scene_ask: Option<Instant>,
+    /// Wait before asking again: 1 s, doubled after each unanswered ask up to 32 s (an ask blocks
+    /// up to a second when nobody answers, e.g. an iceoryx2-only server).
+    scene_retry: Duration,
     common: &'a Common,
     n: Counts,
 }
@@ -158,7 +162,8 @@ impl View<'_> {
         Ok(())
     }
 
-    /// Asks the scene again (at most once a second) when the frame says it changed or none is known.
+    /// Asks the scene again when the frame says it changed or none is known, at most once per
+    /// `scene_retry`.
     fn check_scene(
         &mut self,
         v: &msgs::PoseFrameView<'_>,
@@ -170,14 +175,20 @@ impl View<'_> {
             None => true,
             Some(s) => went_back || s.bodies.len() != v.bodies().len(),
         };
-        if !stale || self.last_scene_ask.is_some_and(|t| t.elapsed() < Duration::from_secs(1)) {
+        if !stale || self.last_scene_ask.is_some_and(|t| t.elapsed() < self.scene_retry) {
             return Ok(());
         }
         self.last_scene_ask = Some(Instant::now());
-        if let Some(s) = scene_best_effort(self.common, link, Duration::from_secs(1)) {
-            self.set_scene(s)?;
+        match scene_best_effort(self.common, link, Duration::from_secs(1)) {
+            Some(s) => {
+                self.scene_retry = Duration::from_secs(1);
+                self.set_scene(s)
+            }
+            None => {
+                self.scene_retry = (self.scene_retry * 2).min(Duration::from_secs(32));
+                Ok(())
+            }
         }
-        Ok(())
     }
 
     /// One received frame; `true` for a frame from the server that decoded.
@@ -253,6 +264,7 @@ pub fn run(common: &Common, args: &Args) -> Result<ExitCode> {
         scene: None,
         last_sim_time: 0.0,
         last_scene_ask: None,
+        scene_retry: Duration::from_secs(1),
         common,
         n: Counts::default(),
     };
