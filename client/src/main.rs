@@ -8,6 +8,7 @@
 //! | `scene` | the scene description (summary or JSON) | zenoh |
 //! | `control` | pause, resume, step, reset, solver variant, load scene | zenoh |
 //! | `record` | poses, stats and inputs into an MCAP file Foxglove opens | zenoh, iceoryx2 |
+//! | `foxglove` | the world live in Foxglove (WebSocket on 127.0.0.1:8765): shapes, transforms, stats | zenoh, iceoryx2 |
 //! | `ping` | pose latency publish → receive, percentiles and histogram | zenoh, iceoryx2 |
 //!
 //! Everything stays on loopback unless told otherwise: Zenoh connects to `tcp/127.0.0.1:7447` as a
@@ -17,6 +18,8 @@
 
 mod control;
 mod drive;
+mod fox;
+mod foxglove_live;
 mod keymap;
 mod net;
 mod ping;
@@ -118,6 +121,8 @@ enum Command {
     Record(record::Args),
     /// Pose latency, server publish → client receive.
     Ping(ping::Args),
+    /// Serve the world live to Foxglove (WebSocket protocol, ws://127.0.0.1:8765 by default).
+    Foxglove(foxglove_live::Args),
 }
 
 fn main() -> std::process::ExitCode {
@@ -138,6 +143,7 @@ fn main() -> std::process::ExitCode {
         Command::Control(a) => control::run(&cli.common, a),
         Command::Record(a) => record::run(&cli.common, a),
         Command::Ping(a) => ping::run(&cli.common, a),
+        Command::Foxglove(a) => foxglove_live::run(&cli.common, a),
     };
     match r {
         Ok(code) => code,

@@ -1,18 +1,21 @@
 //! `record`: poses, stats and operator inputs seen on the wire, into an MCAP file.
 //!
-//! **Format.** Every channel has message encoding `json` and a `jsonschema` schema, the form
-//! Foxglove (and `mcap` tooling) opens without plugins; chunks are zstd-compressed. Channels:
+//! **Format.** The channels of `fox::topics` — the same topics and schemas as the live view
+//! (`foxglove`), so one Foxglove layout opens both: the SDK's well-known protobuf schemas for the 3D
+//! panel, JSON with a JSON schema for the rest; chunks are zstd-compressed.
 //!
 //! | topic | schema | content |
 //! |---|---|---|
-//! | `pivotsim/<world>/poses` | `pivotsim.PoseFrame` | sequence, sim time, wall time, every body (id, name, position, orientation, velocities) |
-//! | `pivotsim/<world>/stats` | `pivotsim.SolverStats` | the stats frame, per-island records, input counters by reject reason |
-//! | `pivotsim/<world>/tf` | `foxglove.FrameTransforms` | `world` → body name transforms: the 3D panel shows every body's frame |
-//! | `pivotsim/<world>/scene` | `pivotsim.SceneDescription` | the scene description once at the start (when the server answers) |
-//! | `pivotsim/<world>/cmd/joystick` … `cmd/actuator` | `pivotsim.Joystick` … | inputs, as seen (channel added at the first one) |
+//! | `/pivotsim/poses` | `pivotsim.PoseFrame` (json) | sequence, sim time, wall time, every body (id, name, position, orientation, velocities) |
+//! | `/pivotsim/stats` | `pivotsim.SolverStats` (json) | the stats frame, per-island records, input counters by reject reason |
+//! | `/tf` | `foxglove.FrameTransforms` (protobuf) | `world` → body name transforms: the 3D panel shows every body's frame |
+//! | `/pivotsim/scene` | `foxglove.SceneUpdate` (protobuf) | the bodies' shapes once at the start (when the server answers) |
+//! | `/pivotsim/description` | `pivotsim.SceneDescription` (json) | the scene description once at the start (when the server answers) |
+//! | `/pivotsim/cmd/joystick` … `cmd/actuator` | `pivotsim.Joystick` … (json) | inputs, as seen (channel added at the first one) |
 //!
-//! Log time is the receive time; publish time is the server's `wall_time_ns` for poses and
-//! transforms, the receive time otherwise. The message sequence is the step number for poses,
+//! The world is in the metadata record `pivotsim` (with the transport, scene and timestep), not in
+//! the topics. Log time is the receive time; publish time is the server's `wall_time_ns` for poses
+//! and transforms, the receive time otherwise. The message sequence is the step number for poses,
 //! stats and transforms, a counter for inputs.
 //!
 //! **Which inputs are seen.** iceoryx2: every input published on the host's `cmd` service.
@@ -31,6 +34,8 @@ use anyhow::{Context, Result, bail};
 use pivotsim_msgs as msgs;
 use pivotsim_msgs::Topic;
 
+use crate::fox::topics::{self, ChannelSpec};
+use crate::fox::{frames, scene};
 use crate::net::{Received, Stream, TransportKind};
 use crate::tojson;
 use crate::{Common, interrupted, secs};
@@ -49,7 +54,7 @@ pub struct Args {
     /// Stop after this many pose frames.
     #[arg(long, value_name = "N")]
     pub count: Option<u64>,
-    /// Leave out the `foxglove.FrameTransforms` channel.
+    /// Leave out the `/tf` channel (`foxglove.FrameTransforms`).
     #[arg(long)]
     pub no_tf: bool,
 }
@@ -62,33 +67,31 @@ struct Channels {
     input_seq: u32,
 }
 
-fn add_json_channel(
-    w: &mut mcap::Writer<BufWriter<File>>,
-    topic: &str,
-    schema_name: &str,
-    schema: &serde_json::Value,
-) -> Result<u16> {
-    let schema_id = w.add_schema(schema_name, "jsonschema", serde_json::to_string(schema)?.as_bytes())?;
-    Ok(w.add_channel(schema_id, topic, "json", &BTreeMap::new())?)
+fn add_channel(w: &mut McapWriter, spec: &ChannelSpec) -> Result<u16> {
+    let schema_id = w.add_schema(&spec.schema.name, &spec.schema.encoding, &spec.schema.data)?;
+    Ok(w.add_channel(schema_id, &spec.topic, &spec.encoding, &BTreeMap::new())?)
 }
 
-fn write(
-    w: &mut mcap::Writer<BufWriter<File>>,
-    channel: u16,
-    seq: u32,
-    log: u64,
-    publish: u64,
-    v: &serde_json::Value,
-) -> Result<()> {
-    let data = serde_json::to_vec(v)?;
+fn write(w: &mut McapWriter, channel: u16, seq: u32, log: u64, publish: u64, data: &[u8]) -> Result<()> {
     let header = mcap::records::MessageHeader {
         channel_id: channel,
         sequence: seq,
         log_time: log,
         publish_time: publish,
     };
-    w.write_to_known_channel(&header, &data)?;
+    w.write_to_known_channel(&header, data)?;
     Ok(())
+}
+
+fn write_json(
+    w: &mut McapWriter,
+    channel: u16,
+    seq: u32,
+    log: u64,
+    publish: u64,
+    v: &serde_json::Value,
+) -> Result<()> {
+    write(w, channel, seq, log, publish, &serde_json::to_vec(v)?)
 }
 
 type McapWriter = mcap::Writer<BufWriter<File>>;
@@ -114,40 +117,22 @@ fn open_file(
     }
     w.write_metadata(&mcap::records::Metadata { name: "pivotsim".into(), metadata: meta })?;
     let mut ch = Channels {
-        poses: add_json_channel(
-            &mut w,
-            &world.key(Topic::Poses),
-            "pivotsim.PoseFrame",
-            &tojson::pose_schema(),
-        )?,
-        stats: add_json_channel(
-            &mut w,
-            &world.key(Topic::Stats),
-            "pivotsim.SolverStats",
-            &tojson::stats_schema(),
-        )?,
+        poses: add_channel(&mut w, &topics::poses())?,
+        stats: add_channel(&mut w, &topics::stats())?,
         tf: None,
         inputs: Vec::new(),
         input_seq: 0,
     };
     if !args.no_tf {
-        let topic = format!("{}/{}/tf", msgs::KEY_PREFIX, world);
-        ch.tf = Some(add_json_channel(
-            &mut w,
-            &topic,
-            "foxglove.FrameTransforms",
-            &tojson::frame_transforms_schema(),
-        )?);
+        ch.tf = Some(add_channel(&mut w, &topics::tf())?);
     }
     if let Some(s) = scene {
-        let id = add_json_channel(
-            &mut w,
-            &world.key(Topic::Scene),
-            "pivotsim.SceneDescription",
-            &tojson::scene_schema(),
-        )?;
         let now = crate::net::now_ns();
-        write(&mut w, id, 0, now, now, &serde_json::to_value(s)?)?;
+        let shapes = scene::scene_update(s, frames::timestamp(now));
+        let id = add_channel(&mut w, &topics::scene())?;
+        write(&mut w, id, 0, now, now, &topics::encode(&shapes.update))?;
+        let id = add_channel(&mut w, &topics::description())?;
+        write_json(&mut w, id, 0, now, now, &serde_json::to_value(s)?)?;
     }
     Ok((w, ch))
 }
@@ -165,7 +150,6 @@ struct Counts {
 struct Recorder<'a> {
     w: McapWriter,
     ch: Channels,
-    world: &'a msgs::WorldName,
     scene: Option<&'a msgs::SceneDescription>,
     n: Counts,
 }
@@ -176,10 +160,10 @@ impl Recorder<'_> {
         let Ok(v) = msgs::PoseFrameView::parse(&r.bytes) else { return Ok(false) };
         let seq = v.sequence() as u32;
         let json = tojson::pose_json(&v, self.scene, |_| true);
-        write(&mut self.w, self.ch.poses, seq, r.recv_ns, v.wall_time_ns(), &json)?;
+        write_json(&mut self.w, self.ch.poses, seq, r.recv_ns, v.wall_time_ns(), &json)?;
         if let Some(tf) = self.ch.tf {
-            let json = tojson::frame_transforms_json(&v, self.scene);
-            write(&mut self.w, tf, seq, r.recv_ns, v.wall_time_ns(), &json)?;
+            let tfs = topics::encode(&frames::frame_transforms(&v, self.scene));
+            write(&mut self.w, tf, seq, r.recv_ns, v.wall_time_ns(), &tfs)?;
         }
         self.n.poses += 1;
         Ok(true)
@@ -187,7 +171,8 @@ impl Recorder<'_> {
 
     fn stats(&mut self, r: &Received) -> Result<bool> {
         let Ok(s) = msgs::SolverStats::decode(&r.bytes) else { return Ok(false) };
-        write(&mut self.w, self.ch.stats, s.sequence as u32, r.recv_ns, r.recv_ns, &tojson::stats_json(&s))?;
+        let json = tojson::stats_json(&s);
+        write_json(&mut self.w, self.ch.stats, s.sequence as u32, r.recv_ns, r.recv_ns, &json)?;
         self.n.stats += 1;
         Ok(true)
     }
@@ -199,17 +184,12 @@ impl Recorder<'_> {
         let id = match self.ch.inputs.iter().find(|(t, _)| *t == topic) {
             Some((_, id)) => *id,
             None => {
-                let id = add_json_channel(
-                    &mut self.w,
-                    &self.world.key(topic),
-                    tojson::input_schema_name(topic),
-                    &tojson::input_schema(topic),
-                )?;
+                let id = add_channel(&mut self.w, &topics::input(topic))?;
                 self.ch.inputs.push((topic, id));
                 id
             }
         };
-        write(&mut self.w, id, self.ch.input_seq, r.recv_ns, r.recv_ns, &tojson::input_json(&c))?;
+        write_json(&mut self.w, id, self.ch.input_seq, r.recv_ns, r.recv_ns, &tojson::input_json(&c))?;
         self.ch.input_seq = self.ch.input_seq.wrapping_add(1);
         self.n.inputs += 1;
         Ok(true)
@@ -241,7 +221,7 @@ pub fn run(common: &Common, args: &Args) -> Result<ExitCode> {
         eprintln!("pivotsim-client: no scene description: bodies named by id, no scene channel");
     }
     let (w, ch) = open_file(args, &world, scene.as_ref())?;
-    let mut rec = Recorder { w, ch, world: &world, scene: scene.as_ref(), n: Counts::default() };
+    let mut rec = Recorder { w, ch, scene: scene.as_ref(), n: Counts::default() };
     let end = args.duration.map(|d| Instant::now() + secs(d));
     let idle = common.timeout.map(secs);
     let tty = std::io::stderr().is_terminal();

@@ -270,50 +270,6 @@ pub fn input_schema_name(topic: msgs::Topic) -> &'static str {
     }
 }
 
-/// Foxglove's `foxglove.FrameTransforms` (JSON encoding) of a pose frame: one transform
-/// `world` → body name per body, so the 3D panel shows every body's frame.
-pub fn frame_transforms_json(v: &msgs::PoseFrameView<'_>, scene: Option<&msgs::SceneDescription>) -> Value {
-    let ns = v.wall_time_ns();
-    let stamp = json!({"sec": ns / 1_000_000_000, "nsec": ns % 1_000_000_000});
-    let transforms: Vec<Value> = v
-        .bodies()
-        .map(|b| {
-            json!({
-                "timestamp": stamp,
-                "parent_frame_id": "world",
-                "child_frame_id": body_name(scene, b.id),
-                "translation": {"x": b.position[0], "y": b.position[1], "z": b.position[2]},
-                "rotation": {"x": b.orientation[0], "y": b.orientation[1], "z": b.orientation[2], "w": b.orientation[3]},
-            })
-        })
-        .collect();
-    json!({ "transforms": transforms })
-}
-
-/// JSON schema of `foxglove.FrameTransforms` (the fields [`frame_transforms_json`] writes).
-pub fn frame_transforms_schema() -> Value {
-    let time =
-        json!({"type": "object", "properties": {"sec": {"type": "integer"}, "nsec": {"type": "integer"}}});
-    json!({
-        "title": "foxglove.FrameTransforms",
-        "description": "An array of FrameTransform messages",
-        "type": "object",
-        "properties": {
-            "transforms": {"type": "array", "items": {
-                "title": "foxglove.FrameTransform",
-                "type": "object",
-                "properties": {
-                    "timestamp": time,
-                    "parent_frame_id": {"type": "string"},
-                    "child_frame_id": {"type": "string"},
-                    "translation": vec3_schema(),
-                    "rotation": quat_schema(),
-                }
-            }}
-        }
-    })
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -389,9 +345,6 @@ mod tests {
         for k in j.as_object().unwrap().keys() {
             assert!(props.get(k).is_some(), "{k} not in the schema");
         }
-        let t = frame_transforms_json(&v, None);
-        assert_eq!(t["transforms"][0]["child_frame_id"], "body1");
-        assert_eq!(t["transforms"][0]["rotation"]["w"], 1.0);
     }
 
     #[test]

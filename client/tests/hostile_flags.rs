@@ -34,6 +34,7 @@ fn hostile_values_of_every_numeric_flag_never_panic() {
         rows.push(vec!["send", "actuator", "slide", v, "--mode", "position"]);
         rows.push(vec!["send", "boom", boom]);
         rows.push(vec!["record", &mcap, "--count", "2", "--duration", v]);
+        rows.push(vec!["foxglove", "--port", "0", "--count", "2", "--duration", v]);
     }
     for v in INTS {
         rows.push(vec!["watch", "--duration", "1", "--plain", "--count", v]);
@@ -47,6 +48,11 @@ fn hostile_values_of_every_numeric_flag_never_panic() {
         rows.push(vec!["ping", "--count", v]);
         rows.push(vec!["ping", "--count", "5", "--warmup", v]);
         rows.push(vec!["ping", "--count", "5", "--poll-us", v]);
+        rows.push(vec!["foxglove", "--port", "0", "--duration", "1", "--count", v]);
+        rows.push(vec!["foxglove", "--duration", "0.5", "--port", v]);
+    }
+    for host in ["x", "", "999.1.1.1", "::1", "127.0.0.1:80"] {
+        rows.push(vec!["foxglove", "--duration", "0.5", "--port", "0", "--host", host]);
     }
     let cases: Vec<Vec<&str>> =
         rows.into_iter().map(|r| base.iter().map(String::as_str).chain(r).collect()).collect();

@@ -193,21 +193,51 @@ fn ping_200_over_iceoryx2() {
     ping(&s, "iceoryx2");
 }
 
-/// Every message of every channel of an MCAP file: topic → (schema name, JSON messages).
-fn read_mcap(path: &std::path::Path) -> std::collections::BTreeMap<String, (String, Vec<Value>)> {
+/// A channel of a recording: its schema (name, encoding) and its messages.
+#[derive(Debug, Default)]
+struct Recorded {
+    schema: String,
+    schema_encoding: String,
+    messages: Vec<Vec<u8>>,
+}
+
+impl Recorded {
+    /// The messages as JSON (a `json` channel).
+    fn json(&self) -> Vec<Value> {
+        self.messages.iter().map(|m| serde_json::from_slice(m).expect("message is JSON")).collect()
+    }
+}
+
+/// Every message of every channel of an MCAP file, by topic; checks each channel's encodings and
+/// that the summary's message counts match what was read.
+fn read_mcap(path: &std::path::Path) -> std::collections::BTreeMap<String, Recorded> {
     let bytes = std::fs::read(path).unwrap();
-    let mut out = std::collections::BTreeMap::new();
+    let mut out: std::collections::BTreeMap<String, Recorded> = std::collections::BTreeMap::new();
     for m in mcap::MessageStream::new(&bytes).unwrap() {
         let m = m.unwrap();
-        assert_eq!(m.channel.message_encoding, "json");
         let schema = m.channel.schema.as_ref().expect("schema");
-        assert_eq!(schema.encoding, "jsonschema");
-        serde_json::from_slice::<Value>(&schema.data).expect("schema is JSON");
-        let e = out.entry(m.channel.topic.clone()).or_insert_with(|| (schema.name.clone(), Vec::new()));
-        e.1.push(serde_json::from_slice(&m.data).expect("message is JSON"));
+        assert!(!schema.data.is_empty(), "{}: empty schema", m.channel.topic);
+        match m.channel.message_encoding.as_str() {
+            "json" => {
+                assert_eq!(schema.encoding, "jsonschema", "{}", m.channel.topic);
+                serde_json::from_slice::<Value>(&schema.data).expect("schema is JSON");
+            }
+            "protobuf" => assert_eq!(schema.encoding, "protobuf", "{}", m.channel.topic),
+            e => panic!("{}: message encoding {e}", m.channel.topic),
+        }
+        let e = out.entry(m.channel.topic.clone()).or_insert_with(|| Recorded {
+            schema: schema.name.clone(),
+            schema_encoding: schema.encoding.clone(),
+            messages: Vec::new(),
+        });
+        e.messages.push(m.data.into_owned());
     }
     let summary = mcap::Summary::read(&bytes).unwrap().expect("summary");
-    assert!(summary.stats.is_some());
+    let stats = summary.stats.as_ref().expect("statistics");
+    for (id, ch) in &summary.channels {
+        let counted = stats.channel_message_counts.get(id).copied().unwrap_or(0);
+        assert_eq!(counted as usize, out[&ch.topic].messages.len(), "{}: summary count", ch.topic);
+    }
     out
 }
 
@@ -224,30 +254,37 @@ fn send_all_four(args: &[String]) {
     }
 }
 
-fn check_recording(path: &std::path::Path, world: &str) {
+fn check_recording(path: &std::path::Path) {
     let m = read_mcap(path);
-    let topic = |t: &str| format!("pivotsim/{world}/{t}");
-    for (t, schema) in [
-        ("poses", "pivotsim.PoseFrame"),
-        ("stats", "pivotsim.SolverStats"),
-        ("tf", "foxglove.FrameTransforms"),
-        ("scene", "pivotsim.SceneDescription"),
-        ("cmd/winch", "pivotsim.WinchCommand"),
-        ("cmd/actuator", "pivotsim.ActuatorCommand"),
-        ("cmd/boom", "pivotsim.BoomCommand"),
-        ("cmd/joystick", "pivotsim.Joystick"),
+    for (t, schema, encoding) in [
+        ("/pivotsim/poses", "pivotsim.PoseFrame", "jsonschema"),
+        ("/pivotsim/stats", "pivotsim.SolverStats", "jsonschema"),
+        ("/tf", "foxglove.FrameTransforms", "protobuf"),
+        ("/pivotsim/scene", "foxglove.SceneUpdate", "protobuf"),
+        ("/pivotsim/description", "pivotsim.SceneDescription", "jsonschema"),
+        ("/pivotsim/cmd/winch", "pivotsim.WinchCommand", "jsonschema"),
+        ("/pivotsim/cmd/actuator", "pivotsim.ActuatorCommand", "jsonschema"),
+        ("/pivotsim/cmd/boom", "pivotsim.BoomCommand", "jsonschema"),
+        ("/pivotsim/cmd/joystick", "pivotsim.Joystick", "jsonschema"),
     ] {
-        let (name, msgs) = m.get(&topic(t)).unwrap_or_else(|| panic!("no channel {t}: {:?}", m.keys()));
-        assert_eq!(name, schema);
-        assert!(!msgs.is_empty(), "no message on {t}");
+        let r = m.get(t).unwrap_or_else(|| panic!("no channel {t}: {:?}", m.keys()));
+        assert_eq!((r.schema.as_str(), r.schema_encoding.as_str()), (schema, encoding), "{t}");
+        assert!(!r.messages.is_empty(), "no message on {t}");
     }
-    let poses = &m[&topic("poses")].1;
+    let poses = m["/pivotsim/poses"].json();
     assert!(poses.len() >= 10, "{} pose messages", poses.len());
     assert!(poses.windows(2).all(|w| w[1]["sequence"].as_u64() > w[0]["sequence"].as_u64()));
     assert_eq!(poses[0]["bodies"][0]["name"], "drum");
-    assert_eq!(m[&topic("tf")].1[0]["transforms"][1]["child_frame_id"], "slider");
-    assert_eq!(m[&topic("cmd/winch")].1[0]["drum_speed"], 0.5);
-    assert_eq!(m[&topic("scene")].1[0]["scene"], "client_drum");
+    // One transform message per pose frame; one scene update and one description.
+    assert_eq!(m["/tf"].messages.len(), poses.len());
+    assert_eq!(m["/pivotsim/scene"].messages.len(), 1);
+    let tf = &m["/tf"].messages[0];
+    // foxglove.FrameTransforms: the body names are the child frames (protobuf strings, in order).
+    let (drum, slider) =
+        (tf.windows(4).position(|w| w == b"drum"), tf.windows(6).position(|w| w == b"slider"));
+    assert!(drum.is_some() && slider.is_some() && drum < slider, "child frames drum, slider");
+    assert_eq!(m["/pivotsim/cmd/winch"].json()[0]["drum_speed"], 0.5);
+    assert_eq!(m["/pivotsim/description"].json()[0]["scene"], "client_drum");
 }
 
 #[test]
@@ -271,7 +308,7 @@ fn record_over_iceoryx2_writes_every_channel() {
     rec.interrupt();
     let out = rec.wait().ok();
     assert!(out.stderr.contains("4 inputs"), "{}", out.stderr);
-    check_recording(&path, s.world.as_str());
+    check_recording(&path);
     let _ = std::fs::remove_dir_all(&dir);
 }
 
@@ -293,7 +330,7 @@ fn record_over_zenoh_sees_inputs_of_peers_connected_to_it() {
     send_all_four(&a);
     rec.interrupt();
     let out = rec.wait().ok();
-    check_recording(&path, s.world.as_str());
+    check_recording(&path);
     assert!(out.stderr.contains("0 malformed"), "{}", out.stderr);
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -1,0 +1,7 @@
+//! pivotsim in Foxglove's terms: the channels (topics and schemas) shared by the live view
+//! (`foxglove`) and the recording (`record`), the scene's shapes as scene entities, the per-step
+//! transforms.
+
+pub mod frames;
+pub mod scene;
+pub mod topics;

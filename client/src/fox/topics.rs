@@ -1,0 +1,154 @@
+//! The Foxglove channels of a world, one list for the live view (`foxglove`) and the recording
+//! (`record`), so that one layout (`docs/foxglove/pivotsim-layout.json`) opens both.
+//!
+//! Topic names do not carry the world (it is in the server info and the MCAP metadata): a layout
+//! then works for any world. They start with `/` as Foxglove's message paths expect.
+//!
+//! | topic | encoding | schema | content |
+//! |---|---|---|---|
+//! | `/tf` | protobuf | `foxglove.FrameTransforms` | every step: `world` → body name, one transform per body |
+//! | `/pivotsim/scene` | protobuf | `foxglove.SceneUpdate` | the bodies' shapes, once per scene (and to each late subscriber) |
+//! | `/pivotsim/description` | json | `pivotsim.SceneDescription` | the scene description, once per scene (and to each late subscriber) |
+//! | `/pivotsim/poses` | json | `pivotsim.PoseFrame` | every step: every body's pose and velocities |
+//! | `/pivotsim/stats` | json | `pivotsim.SolverStats` | every step: solver totals and islands, input counters (the Plot panel charts any number in it) |
+//! | `/pivotsim/cmd/joystick`, `…/winch`, `…/boom`, `…/actuator` | json | `pivotsim.Joystick`, … | operator inputs as seen (`record` only) |
+//!
+//! Reserved for the signals frame (issue 17; not on the wire yet): `/pivotsim/signals` (json,
+//! plottable sensor values) and `/pivotsim/contacts` (`foxglove.SceneUpdate`, contact forces as
+//! arrows in the world frame). See [`SIGNALS`] and [`CONTACTS`].
+
+use foxglove::{Encode, Schema};
+use pivotsim_msgs::Topic;
+
+use crate::tojson;
+
+/// The root frame every body's transform hangs from.
+pub const WORLD_FRAME: &str = "world";
+
+/// Body transforms.
+pub const TF: &str = "/tf";
+/// Body shapes as scene entities.
+pub const SCENE: &str = "/pivotsim/scene";
+/// The scene description.
+pub const DESCRIPTION: &str = "/pivotsim/description";
+/// Pose frames.
+pub const POSES: &str = "/pivotsim/poses";
+/// Solver stats.
+pub const STATS: &str = "/pivotsim/stats";
+/// Reserved: the signals frame as JSON (sensor values for the Plot panel), once it is on the wire.
+#[allow(dead_code)] // until the signals frame exists
+pub const SIGNALS: &str = "/pivotsim/signals";
+/// Reserved: contact forces as arrows (`foxglove.SceneUpdate`, [`super::scene::force_arrows`]),
+/// once the signals frame carries them.
+#[allow(dead_code)] // until the signals frame exists
+pub const CONTACTS: &str = "/pivotsim/contacts";
+
+/// A channel: topic, message encoding and schema.
+#[derive(Debug, Clone)]
+pub struct ChannelSpec {
+    /// Topic name.
+    pub topic: String,
+    /// Message encoding (`protobuf`, `json`).
+    pub encoding: String,
+    /// Schema (name, encoding, data).
+    pub schema: Schema,
+}
+
+/// A channel of one of the SDK's well-known schemas (protobuf).
+fn well_known<T: Encode>(topic: &str) -> ChannelSpec {
+    ChannelSpec {
+        topic: topic.to_string(),
+        encoding: T::get_message_encoding(),
+        schema: T::get_schema().expect("the SDK's well-known schemas carry their schema"),
+    }
+}
+
+/// A JSON channel with its JSON schema.
+fn json(topic: &str, name: &str, schema: &serde_json::Value) -> ChannelSpec {
+    ChannelSpec {
+        topic: topic.to_string(),
+        encoding: "json".to_string(),
+        schema: Schema::new(name, "jsonschema", serde_json::to_vec(schema).expect("a JSON value serializes")),
+    }
+}
+
+/// `/tf`: `foxglove.FrameTransforms`.
+pub fn tf() -> ChannelSpec {
+    well_known::<foxglove::schemas::FrameTransforms>(TF)
+}
+
+/// `/pivotsim/scene`: `foxglove.SceneUpdate`.
+pub fn scene() -> ChannelSpec {
+    well_known::<foxglove::schemas::SceneUpdate>(SCENE)
+}
+
+/// `/pivotsim/description`: `pivotsim.SceneDescription` (JSON).
+pub fn description() -> ChannelSpec {
+    json(DESCRIPTION, "pivotsim.SceneDescription", &tojson::scene_schema())
+}
+
+/// `/pivotsim/poses`: `pivotsim.PoseFrame` (JSON).
+pub fn poses() -> ChannelSpec {
+    json(POSES, "pivotsim.PoseFrame", &tojson::pose_schema())
+}
+
+/// `/pivotsim/stats`: `pivotsim.SolverStats` (JSON).
+pub fn stats() -> ChannelSpec {
+    json(STATS, "pivotsim.SolverStats", &tojson::stats_schema())
+}
+
+/// `/pivotsim/cmd/<input>`: the input topic's JSON channel.
+pub fn input(topic: Topic) -> ChannelSpec {
+    json(
+        &format!("/pivotsim/{}", topic.suffix()),
+        tojson::input_schema_name(topic),
+        &tojson::input_schema(topic),
+    )
+}
+
+/// A message of a well-known schema, encoded (protobuf).
+pub fn encode<T: Encode>(msg: &T) -> Vec<u8> {
+    let mut buf = Vec::with_capacity(msg.encoded_len().unwrap_or(256));
+    // Encoding into a growable vector cannot run out of space.
+    let _ = msg.encode(&mut buf);
+    buf
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The shipped layout plots only fields that the stats channel has, and shows the scene topic.
+    #[test]
+    fn the_layout_plots_fields_of_the_stats_schema() {
+        let layout: serde_json::Value =
+            serde_json::from_str(include_str!("../../../docs/foxglove/pivotsim-layout.json")).unwrap();
+        let stats = tojson::stats_schema();
+        let mut plotted = 0;
+        for (id, panel) in layout["configById"].as_object().unwrap() {
+            for p in panel["paths"].as_array().into_iter().flatten() {
+                let path = p["value"].as_str().unwrap();
+                let field = path.strip_prefix(&format!("{STATS}.")).unwrap_or_else(|| panic!("{id}: {path}"));
+                assert!(stats["properties"].get(field).is_some(), "{id}: {field} is not a stats field");
+                plotted += 1;
+            }
+        }
+        assert!(plotted >= 5);
+        assert_eq!(layout["configById"]["3D!pivotsim"]["topics"][SCENE]["visible"], true);
+        assert_eq!(layout["configById"]["3D!pivotsim"]["followTf"], WORLD_FRAME);
+    }
+
+    #[test]
+    fn well_known_channels_carry_protobuf_schemas() {
+        for (spec, name) in [(tf(), "foxglove.FrameTransforms"), (scene(), "foxglove.SceneUpdate")] {
+            assert_eq!((spec.encoding.as_str(), spec.schema.encoding.as_str()), ("protobuf", "protobuf"));
+            assert_eq!(spec.schema.name, name);
+            assert!(!spec.schema.data.is_empty());
+        }
+        for spec in [description(), poses(), stats(), input(Topic::Boom)] {
+            assert_eq!((spec.encoding.as_str(), spec.schema.encoding.as_str()), ("json", "jsonschema"));
+            serde_json::from_slice::<serde_json::Value>(&spec.schema.data).unwrap();
+        }
+        assert_eq!(input(Topic::Winch).topic, "/pivotsim/cmd/winch");
+    }
+}
