@@ -29,6 +29,7 @@ mod message;
 mod name;
 mod pose;
 mod scene;
+mod signals;
 mod stats;
 
 pub use codes::{ActuatorMode, REJECT_REASONS, RejectReason, SolveStatus, SolverVariant};
@@ -52,6 +53,11 @@ pub use pose::{
     MAX_BODIES, POSE_FIXED_LEN, PoseError, PoseFrame, PoseFrameView, PoseFrameWriter, QUAT_NORM_TOLERANCE,
 };
 pub use scene::*;
+pub use signals::{
+    CHANNEL_DROPOUT, CHANNEL_RECORD_LEN, CONTACT_RECORD_LEN, ContactCode, ContactRecord, EVENT_RECORD_LEN,
+    EVENTS_FIXED_LEN, EventCode, EventRecord, EventsFrame, MAX_CHANNELS, MAX_CONTACTS, MAX_EVENTS,
+    SIGNALS_FIXED_LEN, SignalChannel, SignalsError, SignalsFrame,
+};
 pub use stats::{
     DegradedSolves, ISLAND_FALLBACK, ISLAND_RECORD_LEN, InputHealth, IslandStats, MAX_ISLANDS,
     STATS_FIXED_LEN, SolverStats, StatsError, StepTotals,
