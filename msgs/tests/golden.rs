@@ -96,7 +96,7 @@ fn json_frame(kind: Kind, json: &str) -> Vec<u8> {
 #[test]
 fn readme_control_examples_decode_and_encode_identically() {
     let requests = block_after("<!-- example:control-request -->");
-    assert_eq!(requests.len(), 6);
+    assert_eq!(requests.len(), 8);
     let mut buf = Vec::new();
     for line in requests {
         let r = ControlRequest::decode(&json_frame(Kind::ControlRequest, line))

@@ -604,3 +604,45 @@ fn signals_and_events_content_errors() {
     assert!(matches!(inv(&c), DecodeError::Invalid(SignalsError::TooMany { what: "events", .. })));
     assert!(matches!(SignalsFrame::decode(e), Err(DecodeError::Frame(FrameError::WrongKind { .. }))));
 }
+
+#[test]
+fn fault_request_errors() {
+    let req = |json: &str| ControlRequest::decode(&json_frame(Kind::ControlRequest, json));
+    let ok = req(r#"{"id":1,"command":{"op":"fault","fault":"break","target":"rope/end","tension":2000.0}}"#);
+    assert!(matches!(ok, Ok(ControlRequest { command: ControlCommand::Fault { fault: FaultKind::Break, .. }, .. })));
+    let ok = req(r#"{"id":1,"command":{"op":"fault","fault":"dropout","target":"lmi"}}"#).unwrap();
+    assert!(matches!(ok.command, ControlCommand::Fault { tension: None, to: None, ramp: None, .. }));
+    let bad = |json: &str| req(json).unwrap_err();
+    assert!(matches!(
+        bad(r#"{"id":1,"command":{"op":"fault","fault":"explode","target":"x"}}"#),
+        DecodeError::Invalid(ControlError::UnknownFault { .. })
+    ));
+    assert!(matches!(
+        bad(r#"{"id":1,"command":{"op":"fault","fault":"break","target":""}}"#),
+        DecodeError::Invalid(ControlError::FaultTarget { len: 0 })
+    ));
+    assert!(matches!(
+        bad(r#"{"id":1,"command":{"op":"fault","fault":"break","target":"a","tension":-1.0}}"#),
+        DecodeError::Invalid(ControlError::FaultValue { field: "tension", .. })
+    ));
+    assert!(matches!(
+        bad(r#"{"id":1,"command":{"op":"fault","fault":"brake_fade","target":"a","to":1.5}}"#),
+        DecodeError::Invalid(ControlError::FaultValue { field: "to", .. })
+    ));
+    assert!(matches!(
+        bad(r#"{"id":1,"command":{"op":"fault","fault":"break","target":"a","oops":1}}"#),
+        DecodeError::Frame(FrameError::Json { .. })
+    ));
+    let nan = ControlRequest {
+        id: 1,
+        command: ControlCommand::Fault {
+            fault: FaultKind::BrakeFade,
+            target: "brake".into(),
+            tension: None,
+            to: None,
+            ramp: Some(f64::NAN),
+        },
+    };
+    let mut buf = Vec::new();
+    assert!(nan.encode(&mut buf).is_err() && buf.is_empty());
+}

@@ -179,6 +179,14 @@ pub fn control_request() -> impl Strategy<Value = ControlRequest> {
         prop::sample::select(SolverVariant::ALL.to_vec())
             .prop_map(|variant| ControlCommand::SetVariant { variant }),
         scene_ref().prop_map(|scene| ControlCommand::LoadScene { scene }),
+        (
+            prop::sample::select(FaultKind::ALL.to_vec()),
+            "[A-Za-z0-9_./-]{1,64}",
+            prop::option::of(1e-3..1e7f64),
+            prop::option::of(0.0..=1.0f64),
+            prop::option::of(0.0..100.0f64),
+        )
+            .prop_map(|(fault, target, tension, to, ramp)| ControlCommand::Fault { fault, target, tension, to, ramp }),
     ];
     (any::<u64>(), command).prop_map(|(id, command)| ControlRequest { id, command })
 }

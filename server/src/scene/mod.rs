@@ -221,7 +221,7 @@ impl Scene {
         if result.is_err() {
             let time = self.world.time();
             let name = EventName::new(&req.target);
-            self.signals.push_event(Event { kind: EventKind::FaultRejected, name, time, value: 0.0, level: 0.0 });
+            self.signals.queue_event(Event { kind: EventKind::FaultRejected, name, time, value: 0.0, level: 0.0 });
         }
         result
     }

@@ -6,7 +6,7 @@ use nalgebra::Vector3;
 use super::events::{Event, Threshold};
 use super::sensor::{BodySet, Sensor, SensorKind};
 use super::support::SupportPolygon;
-use crate::dynamics::{ContactReport, JointId, World};
+use crate::dynamics::{BodyId, ContactReport, JointId, World};
 use crate::solver::IndexState;
 
 /// Stick, slip or open (module doc of `signals`).
@@ -36,12 +36,14 @@ impl ContactStateKind {
 }
 
 /// One contact point of a `contacts` sensor in the last step.
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ContactState {
     /// Index of the sensor that reports it.
     pub sensor: u32,
     /// Collider A and collider B (the normal points from A to B).
     pub colliders: [u32; 2],
+    /// Their bodies.
+    pub bodies: [BodyId; 2],
     /// The point on A (world, m).
     pub point: Vector3<f64>,
     /// Its state.
@@ -73,6 +75,8 @@ pub struct Signals {
     pub(super) thresholds: Vec<Threshold>,
     /// Events of the last step.
     pub(super) fired: Vec<Event>,
+    /// Events between steps (refused fault requests), reported with the next step's.
+    pub(super) queued: Vec<Event>,
     /// Events since the scene was (re)loaded.
     pub(super) events_total: u64,
     /// Faults applied / refused since the scene was (re)loaded.
@@ -83,6 +87,9 @@ pub struct Signals {
 /// Contact points a `contacts` sensor keeps per step at most before the frame would grow too
 /// large; further points are not reported (the sums still count them).
 pub const MAX_CONTACT_RECORDS: usize = 4096;
+
+/// Events kept between two steps (refused fault requests) at most; more are counted, not listed.
+pub const MAX_QUEUED_EVENTS: usize = 64;
 
 impl Default for Signals {
     fn default() -> Self {
@@ -136,6 +143,7 @@ impl Signals {
             contacts: Vec::with_capacity(contacts_cap),
             thresholds: Vec::new(),
             fired: Vec::new(),
+            queued: Vec::with_capacity(MAX_QUEUED_EVENTS),
             events_total: 0,
             faults_applied: 0,
             faults_rejected: 0,
@@ -281,6 +289,7 @@ impl Signals {
                             self.contacts.push(ContactState {
                                 sensor: s as u32,
                                 colliders: [c.collider_a.0, c.collider_b.0],
+                                bodies: c.bodies,
                                 point: c.point_a,
                                 state: ContactStateKind::of(&c),
                                 normal_force: c.normal_impulse.max(0.0) / h,

@@ -97,20 +97,35 @@ impl Signals {
         self.fired.reserve(n);
     }
 
-    /// Clears the last step's events (called before a step's faults and thresholds).
+    /// Clears the last step's events (called before a step's faults and thresholds); the events
+    /// queued since ([`Signals::queue_event`]) become this step's first.
     pub fn begin_events(&mut self) {
         self.fired.clear();
+        self.fired.extend(self.queued.drain(..));
+    }
+
+    /// Records an event between steps (a refused request): counted now, listed with the next
+    /// step's events (the first [`MAX_QUEUED_EVENTS`](super::MAX_QUEUED_EVENTS) of them).
+    pub fn queue_event(&mut self, e: Event) {
+        self.count(e.kind);
+        if self.queued.len() < self.queued.capacity() {
+            self.queued.push(e);
+        }
+    }
+
+    fn count(&mut self, kind: EventKind) {
+        self.events_total += 1;
+        match kind {
+            EventKind::Fault => self.faults_applied += 1,
+            EventKind::FaultRejected => self.faults_rejected += 1,
+            EventKind::Raised | EventKind::Cleared => {}
+        }
     }
 
     /// Records an event of this step.
     pub fn push_event(&mut self, e: Event) {
         self.fired.push(e);
-        self.events_total += 1;
-        match e.kind {
-            EventKind::Fault => self.faults_applied += 1,
-            EventKind::FaultRejected => self.faults_rejected += 1,
-            EventKind::Raised | EventKind::Cleared => {}
-        }
+        self.count(e.kind);
     }
 
     /// Checks every threshold on the values of this step at time `time`.
@@ -144,6 +159,7 @@ impl Signals {
             t.active = false;
         }
         self.fired.clear();
+        self.queued.clear();
         self.dropout.fill(false);
         self.events_total = 0;
         self.faults_applied = 0;

@@ -63,7 +63,7 @@ mod events;
 mod sensor;
 mod support;
 
-pub use eval::{ContactState, ContactStateKind, MAX_CONTACT_RECORDS, Signals};
+pub use eval::{ContactState, ContactStateKind, MAX_CONTACT_RECORDS, MAX_QUEUED_EVENTS, Signals};
 pub use events::{Event, EventKind, EventName, Threshold, ThresholdDir};
 pub use sensor::{BodySet, Sensor, SensorKind};
 pub use support::{SupportPolygon, TippingMargin};
