@@ -69,6 +69,11 @@ fn body_set(src: &Source<'_>, world: &World, span: &Range<usize>, field: &str, n
     if names.is_empty() {
         return Err(src.invalid(span, field, "name at least one body"));
     }
+    if names.len() == 1 && names[0] == "*" {
+        // Every body that can move: a whole machine with its load.
+        let ids: Vec<BodyId> = world.bodies().iter().filter(|b| b.is_dynamic()).map(|b| b.id()).collect();
+        return Ok(BodySet::new(world.bodies().len(), &ids));
+    }
     let ids = names
         .iter()
         .map(|n| world.body_id(n).ok_or_else(|| src.invalid(span, field, format!("no body named `{n}`"))))
@@ -103,6 +108,10 @@ fn sensor_kind(src: &Source<'_>, world: &World, span: &Range<usize>, d: &SensorD
         "cylinder" => {
             unused(&[("cable", c), ("bodies", b), ("with", w), ("touch", t)])?;
             SensorKind::Cylinder { joint: joint(&[JointKind::Prismatic, JointKind::Cylindrical])? }
+        }
+        "tension" => {
+            unused(&[("cable", c), ("bodies", b), ("with", w), ("touch", t)])?;
+            SensorKind::Tension { joint: joint(&[])? }
         }
         "drum" => {
             unused(&[("cable", c), ("bodies", b), ("with", w), ("touch", t)])?;
@@ -140,7 +149,7 @@ fn sensor_kind(src: &Source<'_>, world: &World, span: &Range<usize>, d: &SensorD
             return Err(src.invalid(
                 span,
                 "type",
-                format!("unknown sensor type `{other}` (joint, cylinder, drum, cable, contact_sum, tipping, contacts)"),
+                format!("unknown sensor type `{other}` (joint, tension, cylinder, drum, cable, contact_sum, tipping, contacts)"),
             ));
         }
     })

@@ -262,6 +262,7 @@ impl Signals {
                 }
                 SensorKind::Cylinder { joint } => out[0] = self.joint_frame_wrench(world, *joint).0.x,
                 SensorKind::Drum { joint } => out[0] = self.joint_frame_wrench(world, *joint).1.x,
+                SensorKind::Tension { joint } => out[0] = self.wrench(*joint).map_or(0.0, |w| w.0.norm()),
                 SensorKind::Cable { joints } => {
                     let mut max: f64 = 0.0;
                     for (k, j) in joints.iter().enumerate() {

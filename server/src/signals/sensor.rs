@@ -45,6 +45,11 @@ pub enum SensorKind {
         /// The joint.
         joint: JointId,
     },
+    /// The force magnitude `|F_A|` a joint carries (a rope's tension at a ball joint): `tension`.
+    Tension {
+        /// The joint.
+        joint: JointId,
+    },
     /// A hinge's torque about its axis (a winch drum): `torque`.
     Drum {
         /// The joint.
@@ -86,6 +91,7 @@ pub enum SensorKind {
 const JOINT: &[&str] = &["fx", "fy", "fz", "tx", "ty", "tz"];
 const CYLINDER: &[&str] = &["force"];
 const DRUM: &[&str] = &["torque"];
+const TENSION: &[&str] = &["tension"];
 const CONTACT_SUM: &[&str] = &["fx", "fy", "fz", "normal", "friction", "points", "stick", "slip", "sliding"];
 const TIPPING: &[&str] = &["distance", "percent", "supports", "stabilizing", "overturning"];
 
@@ -104,6 +110,7 @@ impl SensorKind {
             SensorKind::Joint { .. } => JOINT,
             SensorKind::Cylinder { .. } => CYLINDER,
             SensorKind::Drum { .. } => DRUM,
+            SensorKind::Tension { .. } => TENSION,
             SensorKind::ContactSum { .. } => CONTACT_SUM,
             SensorKind::Tipping { .. } => TIPPING,
             SensorKind::Cable { .. } | SensorKind::Contacts { .. } => &[],
@@ -123,7 +130,10 @@ impl SensorKind {
     /// The joints whose wrenches this sensor reads.
     pub fn joints(&self) -> &[JointId] {
         match self {
-            SensorKind::Joint { joint } | SensorKind::Cylinder { joint } | SensorKind::Drum { joint } => {
+            SensorKind::Joint { joint }
+            | SensorKind::Cylinder { joint }
+            | SensorKind::Drum { joint }
+            | SensorKind::Tension { joint } => {
                 std::slice::from_ref(joint)
             }
             SensorKind::Cable { joints } => joints,
