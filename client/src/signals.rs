@@ -81,8 +81,14 @@ fn table(s: &msgs::SignalsFrame, events: &[String]) -> String {
 /// Runs `watch --signals`.
 pub fn run(common: &Common, args: &Args) -> Result<ExitCode> {
     let tty = std::io::stdout().is_terminal() && !args.plain && !args.json;
-    let stream =
-        Stream::open(common, args.transport, &[Topic::Signals, Topic::Events], 1024, Duration::from_micros(500), None)?;
+    let stream = Stream::open(
+        common,
+        args.transport,
+        &[Topic::Signals, Topic::Events],
+        1024,
+        Duration::from_micros(500),
+        None,
+    )?;
     let idle = common.timeout.map(secs);
     let end = args.duration.map(|d| Instant::now() + secs(d));
     let mut last_frame = Instant::now();

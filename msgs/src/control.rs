@@ -104,8 +104,13 @@ pub enum FaultKind {
 
 impl FaultKind {
     /// Every kind.
-    pub const ALL: [FaultKind; 5] =
-        [FaultKind::Break, FaultKind::HoseBurst, FaultKind::BrakeFade, FaultKind::StickValve, FaultKind::Dropout];
+    pub const ALL: [FaultKind; 5] = [
+        FaultKind::Break,
+        FaultKind::HoseBurst,
+        FaultKind::BrakeFade,
+        FaultKind::StickValve,
+        FaultKind::Dropout,
+    ];
 
     /// The wire (and scene file) name.
     pub fn name(self) -> &'static str {
@@ -317,10 +322,16 @@ mod raw {
         // fields next to the tag.
         Pause {},
         Resume {},
-        Step { count: u32 },
+        Step {
+            count: u32,
+        },
         Reset {},
-        SetVariant { variant: String },
-        LoadScene { scene: String },
+        SetVariant {
+            variant: String,
+        },
+        LoadScene {
+            scene: String,
+        },
         Fault {
             fault: String,
             target: String,

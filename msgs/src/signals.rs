@@ -379,7 +379,9 @@ impl SignalsFrame {
         let kind = Kind::Signals;
         let p = header::expect(bytes, kind)?;
         if p.len() < SIGNALS_FIXED_LEN {
-            return Err(FrameError::PayloadLength { kind, expected: SIGNALS_FIXED_LEN, found: p.len() }.into());
+            return Err(
+                FrameError::PayloadLength { kind, expected: SIGNALS_FIXED_LEN, found: p.len() }.into()
+            );
         }
         let (n, k) = (le::u32_at(p, 16) as usize, le::u32_at(p, 20) as usize);
         too_many("channels", n, MAX_CHANNELS).map_err(DecodeError::Invalid)?;
@@ -412,8 +414,12 @@ impl SignalsFrame {
         for (i, r) in p[ch_end..].chunks_exact(CONTACT_RECORD_LEN).enumerate() {
             let base = HEADER_LEN + ch_end + i * CONTACT_RECORD_LEN;
             let code = r[8];
-            let state = ContactCode::from_code(code)
-                .ok_or(DecodeError::Invalid(SignalsError::UnknownCode { record: i, what: "contact state", code }))?;
+            let state =
+                ContactCode::from_code(code).ok_or(DecodeError::Invalid(SignalsError::UnknownCode {
+                    record: i,
+                    what: "contact state",
+                    code,
+                }))?;
             header::check_reserved(r, 9..16, base)?;
             let [nf, ff] = le::f64s_at::<2>(r, 40);
             let c = ContactRecord {
@@ -494,8 +500,11 @@ impl EventsFrame {
             let base = HEADER_LEN + EVENTS_FIXED_LEN + i * EVENT_RECORD_LEN;
             let name = name_at(r, 0, i).map_err(DecodeError::Invalid)?;
             let code = r[32];
-            let kind = EventCode::from_code(code)
-                .ok_or(DecodeError::Invalid(SignalsError::UnknownCode { record: i, what: "event kind", code }))?;
+            let kind = EventCode::from_code(code).ok_or(DecodeError::Invalid(SignalsError::UnknownCode {
+                record: i,
+                what: "event kind",
+                code,
+            }))?;
             header::check_reserved(r, 33..40, base)?;
             let [time, value, level] = le::f64s_at::<3>(r, 40);
             let e = EventRecord { name, kind, time, value, level };
@@ -518,7 +527,11 @@ mod tests {
             faults_applied: 1,
             faults_rejected: 0,
             channels: vec![
-                SignalChannel { name: ActuatorName::new("hoist/hook").unwrap(), dropout: false, value: 19620.0 },
+                SignalChannel {
+                    name: ActuatorName::new("hoist/hook").unwrap(),
+                    dropout: false,
+                    value: 19620.0,
+                },
                 SignalChannel { name: ActuatorName::new("lmi/percent").unwrap(), dropout: true, value: 0.0 },
             ],
             contacts: vec![ContactRecord {
@@ -542,14 +555,23 @@ mod tests {
         let ch = HEADER_LEN + SIGNALS_FIXED_LEN;
         let mut x = b.clone();
         x[ch + 32] = 2;
-        assert!(matches!(SignalsFrame::decode(&x), Err(DecodeError::Invalid(SignalsError::ChannelFlags { .. }))));
+        assert!(matches!(
+            SignalsFrame::decode(&x),
+            Err(DecodeError::Invalid(SignalsError::ChannelFlags { .. }))
+        ));
         let mut x = b.clone();
         x[ch + CHANNEL_RECORD_LEN + 40..ch + CHANNEL_RECORD_LEN + 48].copy_from_slice(&1.0f64.to_le_bytes());
-        assert!(matches!(SignalsFrame::decode(&x), Err(DecodeError::Invalid(SignalsError::DropoutValue { .. }))));
+        assert!(matches!(
+            SignalsFrame::decode(&x),
+            Err(DecodeError::Invalid(SignalsError::DropoutValue { .. }))
+        ));
         let ct = ch + 2 * CHANNEL_RECORD_LEN;
         let mut x = b.clone();
         x[ct + 8] = 3;
-        assert!(matches!(SignalsFrame::decode(&x), Err(DecodeError::Invalid(SignalsError::UnknownCode { .. }))));
+        assert!(matches!(
+            SignalsFrame::decode(&x),
+            Err(DecodeError::Invalid(SignalsError::UnknownCode { .. }))
+        ));
         let mut x = b.clone();
         x[ct + 9] = 1;
         assert_eq!(SignalsFrame::decode(&x), Err(FrameError::ReservedNonZero { offset: ct + 9 }.into()));
@@ -584,9 +606,15 @@ mod tests {
         assert_eq!(EventsFrame::decode(&b).unwrap(), e);
         let mut x = b.clone();
         x[HEADER_LEN + EVENTS_FIXED_LEN + 32] = 4;
-        assert!(matches!(EventsFrame::decode(&x), Err(DecodeError::Invalid(SignalsError::UnknownCode { .. }))));
+        assert!(matches!(
+            EventsFrame::decode(&x),
+            Err(DecodeError::Invalid(SignalsError::UnknownCode { .. }))
+        ));
         let mut x = b.clone();
         x[HEADER_LEN + 20] = 1;
-        assert_eq!(EventsFrame::decode(&x), Err(FrameError::ReservedNonZero { offset: HEADER_LEN + 20 }.into()));
+        assert_eq!(
+            EventsFrame::decode(&x),
+            Err(FrameError::ReservedNonZero { offset: HEADER_LEN + 20 }.into())
+        );
     }
 }

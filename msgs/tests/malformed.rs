@@ -589,13 +589,19 @@ fn signals_and_events_content_errors() {
     let r0 = HEADER_LEN + EVENTS_FIXED_LEN;
     let mut c = e.clone();
     set_f64(&mut c, r0 + 40, -1.0);
-    assert_eq!(inv(&c), DecodeError::Invalid(SignalsError::Negative { record: Some(0), field: "time", value: -1.0 }));
+    assert_eq!(
+        inv(&c),
+        DecodeError::Invalid(SignalsError::Negative { record: Some(0), field: "time", value: -1.0 })
+    );
     let mut c = e.clone();
     set_f64(&mut c, r0 + 56, f64::NAN);
     assert_eq!(inv(&c), DecodeError::Invalid(SignalsError::NonFinite { record: Some(0), field: "level" }));
     let mut c = e.clone();
     c[r0 + 32] = 9;
-    assert!(matches!(inv(&c), DecodeError::Invalid(SignalsError::UnknownCode { what: "event kind", code: 9, .. })));
+    assert!(matches!(
+        inv(&c),
+        DecodeError::Invalid(SignalsError::UnknownCode { what: "event kind", code: 9, .. })
+    ));
     let mut c = e.clone();
     c[r0 + 39] = 1;
     assert_eq!(inv(&c), DecodeError::Frame(FrameError::ReservedNonZero { offset: r0 + 39 }));
@@ -609,7 +615,10 @@ fn signals_and_events_content_errors() {
 fn fault_request_errors() {
     let req = |json: &str| ControlRequest::decode(&json_frame(Kind::ControlRequest, json));
     let ok = req(r#"{"id":1,"command":{"op":"fault","fault":"break","target":"rope/end","tension":2000.0}}"#);
-    assert!(matches!(ok, Ok(ControlRequest { command: ControlCommand::Fault { fault: FaultKind::Break, .. }, .. })));
+    assert!(matches!(
+        ok,
+        Ok(ControlRequest { command: ControlCommand::Fault { fault: FaultKind::Break, .. }, .. })
+    ));
     let ok = req(r#"{"id":1,"command":{"op":"fault","fault":"dropout","target":"lmi"}}"#).unwrap();
     assert!(matches!(ok.command, ControlCommand::Fault { tension: None, to: None, ramp: None, .. }));
     let bad = |json: &str| req(json).unwrap_err();

@@ -126,7 +126,10 @@ t = 0.25
     let torque = s.signals.value("brake/torque").unwrap().abs();
     assert!((torque - 98.1).abs() < 1e-6 * 98.1, "brake torque {torque}");
     let ev = run(&mut s, 90);
-    assert!(ev.iter().any(|e| e.0 == EventKind::Fault && e.1 == "hose" && (e.2 - 0.5).abs() < 0.02), "{ev:?}");
+    assert!(
+        ev.iter().any(|e| e.0 == EventKind::Fault && e.1 == "hose" && (e.2 - 0.5).abs() < 0.02),
+        "{ev:?}"
+    );
     assert!(ev.iter().any(|e| e.0 == EventKind::Fault && e.1 == "fade"));
     assert!(angle(&s, "pivot").abs() > 0.5, "a limp drive lets the arm fall: {}", angle(&s, "pivot"));
     assert!(angle(&s, "pivot2").abs() > 0.2, "a faded brake lets go: {}", angle(&s, "pivot2"));
@@ -194,7 +197,10 @@ fn bad_declarations_are_located_errors() {
         ("[[sensor]]\nname = \"x\"\ntype = \"joint\"\njoint = \"nope\"", "joint"),
         ("[[sensor]]\nname = \"x\"\ntype = \"cable\"\ncable = \"nope\"", "cable"),
         ("[[sensor]]\nname = \"x\"\ntype = \"tipping\"\nbodies = [\"arm\"]\ntouch = nan", "touch"),
-        ("[[sensor]]\nname = \"a-name-much-too-long-for-the-wire\"\ntype = \"joint\"\njoint = \"pivot\"", "name"),
+        (
+            "[[sensor]]\nname = \"a-name-much-too-long-for-the-wire\"\ntype = \"joint\"\njoint = \"pivot\"",
+            "name",
+        ),
         ("[[sensor]]\nname = \"pivot\"\ntype = \"joint\"\njoint = \"pivot\"", "name"),
         ("[[event]]\nname = \"e\"\nchannel = \"pivot/nope\"\nabove = 1.0", "channel"),
         ("[[event]]\nname = \"e\"\nchannel = \"pivot/fx\"\nabove = 1.0\nbelow = 0.0", "above"),

@@ -196,7 +196,8 @@ fn box_on_incline_sticks_below_tan_theta_mu_and_slips_above() {
         for _ in 0..60 {
             s.step().unwrap();
             slip_events += s.signals.events().iter().filter(|e| e.kind == EventKind::Raised).count();
-            let pressed: Vec<_> = s.signals.contacts().iter().filter(|c| c.state != ContactStateKind::Open).collect();
+            let pressed: Vec<_> =
+                s.signals.contacts().iter().filter(|c| c.state != ContactStateKind::Open).collect();
             assert_eq!(pressed.len(), 4, "ratio {ratio}: four pressed corners");
             let slipping = pressed.iter().filter(|c| c.state == ContactStateKind::Slip).count();
             let sliding = s.signals.value("grip/sliding").unwrap();
@@ -275,7 +276,10 @@ tension = {limit}
             assert!((e.value - tension).abs() < 1e-9 * limit, "the event carries this step's tension");
             assert!(tension > limit && last <= limit, "first crossing: {last} → {tension}");
             let change = tension - last;
-            assert!(tension - limit <= change, "parted at {tension} N, limit {limit} N, step change {change} N");
+            assert!(
+                tension - limit <= change,
+                "parted at {tension} N, limit {limit} N, step change {change} N"
+            );
             assert!(!s.world.joint(rope).unwrap().is_enabled());
             eprintln!("parted at {tension:.3} N (limit {limit:.3} N, step change {change:.3} N)");
             broke = Some(step);

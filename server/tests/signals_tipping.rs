@@ -85,7 +85,8 @@ fn tipping_margin_crosses_zero_at_the_static_boom_angle_and_the_machine_tips() {
         s.step().unwrap();
         end = step;
         let d = s.signals.value("lmi/distance").unwrap();
-        if s.signals.events().iter().any(|e| e.kind == EventKind::Raised && e.name.as_str() == "lmi-warning") {
+        if s.signals.events().iter().any(|e| e.kind == EventKind::Raised && e.name.as_str() == "lmi-warning")
+        {
             warned_at.get_or_insert(boom_angle(&s));
         }
         if crossed_at.is_none() && d < 0.0 && last >= 0.0 {
@@ -98,7 +99,9 @@ fn tipping_margin_crosses_zero_at_the_static_boom_angle_and_the_machine_tips() {
         }
     }
     let (step, angle) = crossed_at.expect("the margin crossed zero");
-    eprintln!("crossed at step {step}, boom angle {angle:.3}° (statics {theta_star:.3}°); warning at {warned_at:?}");
+    eprintln!(
+        "crossed at step {step}, boom angle {angle:.3}° (statics {theta_star:.3}°); warning at {warned_at:?}"
+    );
     assert!((angle - theta_star).abs() < 1.0, "crossed at {angle}°, statics {theta_star}°");
     assert!(warned_at.expect("a 10 % warning") < angle, "the warning comes first");
     let up = s.world.body(carrier).unwrap().pose().rotation * nalgebra::Vector3::z();

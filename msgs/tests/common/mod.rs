@@ -186,7 +186,13 @@ pub fn control_request() -> impl Strategy<Value = ControlRequest> {
             prop::option::of(0.0..=1.0f64),
             prop::option::of(0.0..100.0f64),
         )
-            .prop_map(|(fault, target, tension, to, ramp)| ControlCommand::Fault { fault, target, tension, to, ramp }),
+            .prop_map(|(fault, target, tension, to, ramp)| ControlCommand::Fault {
+                fault,
+                target,
+                tension,
+                to,
+                ramp
+            }),
     ];
     (any::<u64>(), command).prop_map(|(id, command)| ControlRequest { id, command })
 }
@@ -526,16 +532,16 @@ pub fn signal_channel() -> impl Strategy<Value = SignalChannel> {
 }
 
 pub fn contact_record() -> impl Strategy<Value = ContactRecord> {
-    (any::<(u32, u32)>(), 0u8..3, vec3(), non_negative(), non_negative()).prop_map(|((a, b), s, point, n, f)| {
-        ContactRecord {
+    (any::<(u32, u32)>(), 0u8..3, vec3(), non_negative(), non_negative()).prop_map(
+        |((a, b), s, point, n, f)| ContactRecord {
             body_a: a,
             body_b: b,
             state: ContactCode::from_code(s).unwrap(),
             point,
             normal_force: n,
             friction_force: f,
-        }
-    })
+        },
+    )
 }
 
 pub fn signals_frame() -> impl Strategy<Value = SignalsFrame> {
@@ -546,9 +552,19 @@ pub fn signals_frame() -> impl Strategy<Value = SignalsFrame> {
         prop::collection::vec(signal_channel(), 0..16),
         prop::collection::vec(contact_record(), 0..8),
     )
-        .prop_map(|(sequence, sim_time, (events_total, faults_applied, faults_rejected), channels, contacts)| {
-            SignalsFrame { sequence, sim_time, events_total, faults_applied, faults_rejected, channels, contacts }
-        })
+        .prop_map(
+            |(sequence, sim_time, (events_total, faults_applied, faults_rejected), channels, contacts)| {
+                SignalsFrame {
+                    sequence,
+                    sim_time,
+                    events_total,
+                    faults_applied,
+                    faults_rejected,
+                    channels,
+                    contacts,
+                }
+            },
+        )
 }
 
 pub fn events_frame() -> impl Strategy<Value = EventsFrame> {

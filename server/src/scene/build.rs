@@ -16,8 +16,8 @@ use toml::Spanned;
 
 use super::checks::{R, Source};
 use super::controls::{
-    Actuator, ActuatorFault, ActuatorKind, ActuatorTarget, AxisMode, ButtonAction, Controls, JoyAxis, JoyButton,
-    JoystickMap, Neutral, SceneEvent, Script, ScriptEntry,
+    Actuator, ActuatorFault, ActuatorKind, ActuatorTarget, AxisMode, ButtonAction, Controls, JoyAxis,
+    JoyButton, JoystickMap, Neutral, SceneEvent, Script, ScriptEntry,
 };
 use super::format::*;
 use super::{Scene, SceneError};

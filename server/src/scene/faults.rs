@@ -160,10 +160,13 @@ impl Faults {
         };
         let at = num("t", at, |x| x.is_finite() && x >= 0.0, "finite, ≥ 0")?;
         let tension = num("tension", req.tension, |x| x.is_finite() && x > 0.0, "finite, > 0")?;
-        let actuator = || controls.index(&req.target).ok_or_else(|| FaultError::UnknownActuator(req.target.clone()));
+        let actuator =
+            || controls.index(&req.target).ok_or_else(|| FaultError::UnknownActuator(req.target.clone()));
         let action = match req.kind.as_str() {
             "break" => FaultAction::Break {
-                joint: world.joint_id(&req.target).ok_or_else(|| FaultError::UnknownJoint(req.target.clone()))?,
+                joint: world
+                    .joint_id(&req.target)
+                    .ok_or_else(|| FaultError::UnknownJoint(req.target.clone()))?,
             },
             "hose_burst" => FaultAction::HoseBurst { actuator: actuator()? },
             "stick_valve" => FaultAction::StickValve { actuator: actuator()? },
@@ -173,7 +176,8 @@ impl Faults {
                     return Err(FaultError::NotABrake(req.target.clone()));
                 }
                 let to = num("to", req.to, |x| (0.0..=1.0).contains(&x), "0 to 1")?.unwrap_or(0.0);
-                let ramp = num("ramp", req.ramp, |x| x.is_finite() && x >= 0.0, "finite, ≥ 0")?.unwrap_or(0.0);
+                let ramp =
+                    num("ramp", req.ramp, |x| x.is_finite() && x >= 0.0, "finite, ≥ 0")?.unwrap_or(0.0);
                 FaultAction::BrakeFade { actuator: i, to, ramp }
             }
             "dropout" => FaultAction::Dropout {
@@ -184,7 +188,11 @@ impl Faults {
             other => return Err(FaultError::UnknownKind(other.to_string())),
         };
         if tension.is_some() && !matches!(action, FaultAction::Break { .. }) {
-            return Err(FaultError::BadValue { field: "tension", value: tension.unwrap_or(0.0), range: "break only" });
+            return Err(FaultError::BadValue {
+                field: "tension",
+                value: tension.unwrap_or(0.0),
+                range: "break only",
+            });
         }
         let trigger = match (at, tension) {
             (_, Some(t)) => FaultTrigger::Tension(t),
@@ -244,7 +252,8 @@ impl Faults {
         signals: &mut Signals,
     ) -> Result<(), ControlError> {
         for f in &mut self.list {
-            if let (None, FaultAction::Break { joint }, FaultTrigger::Tension(limit)) = (f.fired_at, f.action, f.trigger)
+            if let (None, FaultAction::Break { joint }, FaultTrigger::Tension(limit)) =
+                (f.fired_at, f.action, f.trigger)
                 && let Some(tension) = signals.joint_force(joint)
                 && tension > limit
             {

@@ -51,8 +51,8 @@ use thiserror::Error;
 
 pub use builtin::{BUILTIN, BuiltinScene, builtin};
 pub use controls::{
-    Actuator, ActuatorFault, ActuatorKind, ActuatorTarget, AxisMode, ButtonAction, Controls, InputError, JoyAxis, JoyButton,
-    JoystickError, JoystickMap, Neutral, SceneEvent, Script, ScriptEntry,
+    Actuator, ActuatorFault, ActuatorKind, ActuatorTarget, AxisMode, ButtonAction, Controls, InputError,
+    JoyAxis, JoyButton, JoystickError, JoystickMap, Neutral, SceneEvent, Script, ScriptEntry,
 };
 pub use faults::{Fault, FaultAction, FaultError, FaultRequest, FaultTrigger, Faults, MAX_FAULTS};
 pub use overrides::{OverrideError, SceneOverride};
@@ -221,7 +221,13 @@ impl Scene {
         if result.is_err() {
             let time = self.world.time();
             let name = EventName::new(&req.target);
-            self.signals.queue_event(Event { kind: EventKind::FaultRejected, name, time, value: 0.0, level: 0.0 });
+            self.signals.queue_event(Event {
+                kind: EventKind::FaultRejected,
+                name,
+                time,
+                value: 0.0,
+                level: 0.0,
+            });
         }
         result
     }

@@ -34,12 +34,19 @@ pub(super) fn build_signals(
         for k in 0..kind.channels() {
             let ch = format!("{}/{}", d.name, kind.channel_name(k));
             pivotsim_msgs::validate_actuator_name(&ch).map_err(|e| {
-                src.invalid(&span, "name", format!("channel `{ch}`: {e} (a channel name is the wire's 1 to 32 bytes of [A-Za-z0-9_.-/])"))
+                src.invalid(
+                    &span,
+                    "name",
+                    format!(
+                        "channel `{ch}`: {e} (a channel name is the wire's 1 to 32 bytes of [A-Za-z0-9_.-/])"
+                    ),
+                )
             })?;
         }
         list.push(Sensor { name: d.name.clone(), kind });
     }
-    let mut signals = Signals::new(list, world.joints().len(), world.bodies().len(), world.settings().gravity);
+    let mut signals =
+        Signals::new(list, world.joints().len(), world.bodies().len(), world.settings().gravity);
     for e in events {
         let (span, d) = (e.span(), e.get_ref());
         pivotsim_msgs::validate_actuator_name(&d.name)
@@ -65,7 +72,13 @@ pub(super) fn build_signals(
     Ok(signals)
 }
 
-fn body_set(src: &Source<'_>, world: &World, span: &Range<usize>, field: &str, names: &[String]) -> R<BodySet> {
+fn body_set(
+    src: &Source<'_>,
+    world: &World,
+    span: &Range<usize>,
+    field: &str,
+    names: &[String],
+) -> R<BodySet> {
     if names.is_empty() {
         return Err(src.invalid(span, field, "name at least one body"));
     }
@@ -87,10 +100,20 @@ fn sensor_kind(src: &Source<'_>, world: &World, span: &Range<usize>, d: &SensorD
     };
     let joint = |want: &[JointKind]| -> R<_> {
         let n = need(&d.joint, "joint")?;
-        let id = world.joint_id(&n).ok_or_else(|| src.invalid(span, "joint", format!("no joint named `{n}`")))?;
+        let id =
+            world.joint_id(&n).ok_or_else(|| src.invalid(span, "joint", format!("no joint named `{n}`")))?;
         let kind = world.joint(id).map(|j| j.kind()).unwrap_or(JointKind::Fixed);
         if !want.is_empty() && !want.contains(&kind) {
-            return Err(src.invalid(span, "joint", format!("`{n}` is a {} joint, a {} sensor needs {}", kind.name(), d.kind, want.iter().map(|k| k.name()).collect::<Vec<_>>().join(" or "))));
+            return Err(src.invalid(
+                span,
+                "joint",
+                format!(
+                    "`{n}` is a {} joint, a {} sensor needs {}",
+                    kind.name(),
+                    d.kind,
+                    want.iter().map(|k| k.name()).collect::<Vec<_>>().join(" or ")
+                ),
+            ));
         }
         Ok(id)
     };
@@ -99,7 +122,8 @@ fn sensor_kind(src: &Source<'_>, world: &World, span: &Range<usize>, d: &SensorD
         Some((f, _)) => Err(src.invalid(span, f, format!("`{f}` does not apply to a {} sensor", d.kind))),
         None => Ok(()),
     };
-    let (j, c, b, w, t) = (d.joint.is_some(), d.cable.is_some(), d.bodies.is_some(), d.with.is_some(), d.touch.is_some());
+    let (j, c, b, w, t) =
+        (d.joint.is_some(), d.cable.is_some(), d.bodies.is_some(), d.with.is_some(), d.touch.is_some());
     Ok(match d.kind.as_str() {
         "joint" => {
             unused(&[("cable", c), ("bodies", b), ("with", w), ("touch", t)])?;
@@ -172,7 +196,9 @@ pub(super) fn build_faults(
             (Some(j), None, None) => ("joint", j),
             (None, Some(a), None) => ("actuator", a),
             (None, None, Some(s)) => ("sensor", s),
-            _ => return Err(src.invalid(&span, "joint", "give exactly one of `joint`, `actuator`, `sensor`")),
+            _ => {
+                return Err(src.invalid(&span, "joint", "give exactly one of `joint`, `actuator`, `sensor`"));
+            }
         };
         let want = match d.kind.as_str() {
             "break" => "joint",
@@ -185,9 +211,15 @@ pub(super) fn build_faults(
         if d.t.is_none() && d.tension.is_none() {
             return Err(src.invalid(&span, "t", "a scripted fault needs `t` (or `tension` for a break)"));
         }
-        let req = FaultRequest { kind: d.kind.clone(), target: target.clone(), tension: d.tension, to: d.to, ramp: d.ramp };
-        let mut fault =
-            Faults::resolve(&req, world, controls, signals, d.t).map_err(|e| src.invalid(&span, "type", e.to_string()))?;
+        let req = FaultRequest {
+            kind: d.kind.clone(),
+            target: target.clone(),
+            tension: d.tension,
+            to: d.to,
+            ramp: d.ramp,
+        };
+        let mut fault = Faults::resolve(&req, world, controls, signals, d.t)
+            .map_err(|e| src.invalid(&span, "type", e.to_string()))?;
         fault.name = EventName::new(&d.name);
         faults.push(fault, signals).map_err(|e| src.invalid(&span, "name", e.to_string()))?;
     }

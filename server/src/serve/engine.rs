@@ -576,7 +576,14 @@ impl Engine {
                 warn!("events frame not encodable: {e}");
             }
             for e in &self.events.events {
-                info!("event {} {} at {:.3} s: value {} (level {})", e.kind.name(), e.name.as_str(), e.time, e.value, e.level);
+                info!(
+                    "event {} {} at {:.3} s: value {} (level {})",
+                    e.kind.name(),
+                    e.name.as_str(),
+                    e.time,
+                    e.value,
+                    e.level
+                );
             }
         }
     }

@@ -180,6 +180,9 @@ impl Transport for IoxTransport {
     }
 
     fn describe(&self) -> String {
-        format!("iceoryx2 (same host, shared memory): services {}/{{poses, stats, signals, events, cmd}}", self.prefix)
+        format!(
+            "iceoryx2 (same host, shared memory): services {}/{{poses, stats, signals, events, cmd}}",
+            self.prefix
+        )
     }
 }

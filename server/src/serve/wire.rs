@@ -206,7 +206,11 @@ pub(crate) fn fill_signals(
     out.channels.clear();
     for ((name, &value), &valid) in names.iter().zip(signals.values()).zip(signals.valid()) {
         let ok = valid && value.is_finite();
-        out.channels.push(msgs::SignalChannel { name: *name, dropout: !ok, value: if ok { value } else { 0.0 } });
+        out.channels.push(msgs::SignalChannel {
+            name: *name,
+            dropout: !ok,
+            value: if ok { value } else { 0.0 },
+        });
     }
     out.contacts.clear();
     for c in signals.contacts().iter().take(msgs::MAX_CONTACTS) {

@@ -203,7 +203,10 @@ impl Transport for ZenohTransport {
         if !self.connect.is_empty() {
             d.push_str(&format!(" connecting to {}", self.connect.join(", ")));
         }
-        d.push_str(&format!(": keys {}/{{poses, stats, signals, events, cmd/*, scene, control}}", self.prefix));
+        d.push_str(&format!(
+            ": keys {}/{{poses, stats, signals, events, cmd/*, scene, control}}",
+            self.prefix
+        ));
         d
     }
 

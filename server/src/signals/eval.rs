@@ -28,9 +28,8 @@ impl ContactStateKind {
             return ContactStateKind::Open;
         }
         let bound = c.mu * c.normal_impulse;
-        let at_bound = |k: usize| {
-            c.states[1 + k].is_tight() || c.friction_impulse[k].abs() >= bound * (1.0 - 1e-9)
-        };
+        let at_bound =
+            |k: usize| c.states[1 + k].is_tight() || c.friction_impulse[k].abs() >= bound * (1.0 - 1e-9);
         if at_bound(0) || at_bound(1) { ContactStateKind::Slip } else { ContactStateKind::Stick }
     }
 }

@@ -133,9 +133,7 @@ impl SensorKind {
             SensorKind::Joint { joint }
             | SensorKind::Cylinder { joint }
             | SensorKind::Drum { joint }
-            | SensorKind::Tension { joint } => {
-                std::slice::from_ref(joint)
-            }
+            | SensorKind::Tension { joint } => std::slice::from_ref(joint),
             SensorKind::Cable { joints } => joints,
             _ => &[],
         }

@@ -105,7 +105,9 @@ impl SupportPolygon {
             if i > 0 && close(&pts[i - 1], &p) {
                 continue;
             }
-            while self.hull.len() >= 2 && cross(&self.hull[self.hull.len() - 2], &self.hull[self.hull.len() - 1], &p) <= 1e-12 {
+            while self.hull.len() >= 2
+                && cross(&self.hull[self.hull.len() - 2], &self.hull[self.hull.len() - 1], &p) <= 1e-12
+            {
                 self.hull.pop();
             }
             self.hull.push(p);
@@ -116,7 +118,9 @@ impl SupportPolygon {
             if close(&pts[i + 1], &p) {
                 continue;
             }
-            while self.hull.len() >= lower && cross(&self.hull[self.hull.len() - 2], &self.hull[self.hull.len() - 1], &p) <= 1e-12 {
+            while self.hull.len() >= lower
+                && cross(&self.hull[self.hull.len() - 2], &self.hull[self.hull.len() - 1], &p) <= 1e-12
+            {
                 self.hull.pop();
             }
             self.hull.push(p);
@@ -148,7 +152,8 @@ impl SupportPolygon {
             (a + ab * t - p).norm()
         };
         if n < 3 {
-            let d = if n == 1 { (self.hull[0] - c).norm() } else { seg_dist(&self.hull[0], &self.hull[1], &c) };
+            let d =
+                if n == 1 { (self.hull[0] - c).norm() } else { seg_dist(&self.hull[0], &self.hull[1], &c) };
             let percent = if d <= 1e-12 { 0.0 } else { -100.0 };
             return TippingMargin { distance: -d, percent, supports: n, stabilizing: 0.0, overturning: 0.0 };
         }
@@ -210,7 +215,8 @@ mod tests {
     #[test]
     fn margin_inside_outside_and_moments() {
         let mut s = square();
-        let m = s.margin(&Vector3::new(0.25, 0.0, 3.0), 10.0, [(1.0, Vector3::new(0.25, 0.0, 0.0))].into_iter());
+        let m =
+            s.margin(&Vector3::new(0.25, 0.0, 3.0), 10.0, [(1.0, Vector3::new(0.25, 0.0, 0.0))].into_iter());
         assert!((m.distance.abs() - 0.75).abs() < 1e-12 && m.distance > 0.0);
         assert!((m.percent - 100.0).abs() < 1e-12 && (m.stabilizing - 7.5).abs() < 1e-12);
         s.clear();

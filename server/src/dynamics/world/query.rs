@@ -142,7 +142,8 @@ impl World {
     pub fn last_joint_rows(&self) -> impl Iterator<Item = (JointId, &ConstraintRow, f64, IndexState)> + '_ {
         self.ws.rows.iter().filter_map(move |row| match row.key {
             RowKey::Joint { joint, .. } => {
-                let (lambda, state) = self.last_step_row(row.key).map_or((0.0, IndexState::Free), |w| (w.lambda, w.state));
+                let (lambda, state) =
+                    self.last_step_row(row.key).map_or((0.0, IndexState::Free), |w| (w.lambda, w.state));
                 Some((joint, row, lambda, state))
             }
             _ => None,
