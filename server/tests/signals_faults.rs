@@ -169,15 +169,15 @@ fn live_requests_fire_next_step_and_bad_ones_are_typed_and_counted() {
     ];
     for (r, what) in &bad {
         let e = s.request_fault(r).unwrap_err();
-        let ok = match (what, &e) {
+        let ok = matches!(
+            (what, &e),
             (&"joint", FaultError::UnknownJoint(_))
-            | (&"actuator", FaultError::UnknownActuator(_))
-            | (&"sensor", FaultError::UnknownSensor(_))
-            | (&"brake", FaultError::NotABrake(_))
-            | (&"kind", FaultError::UnknownKind(_))
-            | (&"value", FaultError::BadValue { .. }) => true,
-            _ => false,
-        };
+                | (&"actuator", FaultError::UnknownActuator(_))
+                | (&"sensor", FaultError::UnknownSensor(_))
+                | (&"brake", FaultError::NotABrake(_))
+                | (&"kind", FaultError::UnknownKind(_))
+                | (&"value", FaultError::BadValue { .. })
+        );
         assert!(ok, "{r:?}: {e:?}");
     }
     assert_eq!(s.signals.faults_rejected(), bad.len() as u64);

@@ -93,66 +93,6 @@ impl From<&IslandStats> for msgs::IslandStats {
     }
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn the_solver_variant_list_is_the_wire_list() {
-        let names: Vec<&str> = Variant::ALL.iter().map(|v| v.name()).collect();
-        assert_eq!(names, msgs::SOLVER_VARIANTS);
-        for (i, v) in Variant::ALL.into_iter().enumerate() {
-            let w = msgs::SolverVariant::from(v);
-            assert_eq!(usize::from(w.code()), i, "{v}: wire code");
-            assert_eq!(w.name(), v.name());
-            assert_eq!(Variant::from(w), v);
-        }
-        assert_eq!(msgs::SolverVariant::ALL.len(), Variant::ALL.len());
-    }
-
-    #[test]
-    fn statuses_keep_their_names() {
-        for s in [
-            SolveStatus::Converged,
-            SolveStatus::Inexact,
-            SolveStatus::MaxSteps,
-            SolveStatus::Empty,
-            SolveStatus::NonFinite,
-            SolveStatus::Budget,
-        ] {
-            assert_eq!(msgs::SolveStatus::from(s).name(), s.name());
-        }
-        assert_eq!(msgs::SolveStatus::ALL.len(), 6);
-    }
-
-    #[test]
-    fn island_stats_carry_the_fallback_flag_and_stay_finite() {
-        let mut s = IslandStats {
-            bodies: 3,
-            rows: 12,
-            variant: Variant::Auto,
-            status: SolveStatus::MaxSteps,
-            fallback: true,
-            pivot_steps: 35,
-            tight: 4,
-            solve_us: 12.5,
-            residual_rel: 1e-3,
-            ..Default::default()
-        };
-        let w = msgs::IslandStats::from(&s);
-        assert!(w.fallback);
-        assert_eq!(
-            (w.variant, w.status, w.rows, w.bodies, w.pivot_steps, w.tight),
-            (msgs::SolverVariant::Auto, msgs::SolveStatus::MaxSteps, 12, 3, 35, 4)
-        );
-        s.fallback = false;
-        s.residual_rel = f64::NAN;
-        let w = msgs::IslandStats::from(&s);
-        assert!(!w.fallback);
-        assert_eq!(w.residual_rel, f64::MAX);
-    }
-}
-
 impl From<ContactStateKind> for msgs::ContactCode {
     fn from(s: ContactStateKind) -> Self {
         match s {
@@ -242,5 +182,65 @@ pub(crate) fn fill_events(signals: &Signals, sequence: u64, sim_time: f64, out: 
             value: finite(e.value),
             level: finite(e.level),
         });
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_solver_variant_list_is_the_wire_list() {
+        let names: Vec<&str> = Variant::ALL.iter().map(|v| v.name()).collect();
+        assert_eq!(names, msgs::SOLVER_VARIANTS);
+        for (i, v) in Variant::ALL.into_iter().enumerate() {
+            let w = msgs::SolverVariant::from(v);
+            assert_eq!(usize::from(w.code()), i, "{v}: wire code");
+            assert_eq!(w.name(), v.name());
+            assert_eq!(Variant::from(w), v);
+        }
+        assert_eq!(msgs::SolverVariant::ALL.len(), Variant::ALL.len());
+    }
+
+    #[test]
+    fn statuses_keep_their_names() {
+        for s in [
+            SolveStatus::Converged,
+            SolveStatus::Inexact,
+            SolveStatus::MaxSteps,
+            SolveStatus::Empty,
+            SolveStatus::NonFinite,
+            SolveStatus::Budget,
+        ] {
+            assert_eq!(msgs::SolveStatus::from(s).name(), s.name());
+        }
+        assert_eq!(msgs::SolveStatus::ALL.len(), 6);
+    }
+
+    #[test]
+    fn island_stats_carry_the_fallback_flag_and_stay_finite() {
+        let mut s = IslandStats {
+            bodies: 3,
+            rows: 12,
+            variant: Variant::Auto,
+            status: SolveStatus::MaxSteps,
+            fallback: true,
+            pivot_steps: 35,
+            tight: 4,
+            solve_us: 12.5,
+            residual_rel: 1e-3,
+            ..Default::default()
+        };
+        let w = msgs::IslandStats::from(&s);
+        assert!(w.fallback);
+        assert_eq!(
+            (w.variant, w.status, w.rows, w.bodies, w.pivot_steps, w.tight),
+            (msgs::SolverVariant::Auto, msgs::SolveStatus::MaxSteps, 12, 3, 35, 4)
+        );
+        s.fallback = false;
+        s.residual_rel = f64::NAN;
+        let w = msgs::IslandStats::from(&s);
+        assert!(!w.fallback);
+        assert_eq!(w.residual_rel, f64::MAX);
     }
 }

@@ -101,7 +101,7 @@ impl Signals {
     /// queued since ([`Signals::queue_event`]) become this step's first.
     pub fn begin_events(&mut self) {
         self.fired.clear();
-        self.fired.extend(self.queued.drain(..));
+        self.fired.append(&mut self.queued);
     }
 
     /// Records an event between steps (a refused request): counted now, listed with the next
