@@ -64,14 +64,18 @@ impl Op {
 
 /// Runs `control`.
 pub fn run(common: &Common, args: &Args) -> Result<ExitCode> {
-    let command = args.op.command()?;
+    request(common, args.op.command()?, args.json)
+}
+
+/// Sends one control request, prints the reply; exit code 2 when the server refused it.
+pub fn request(common: &Common, command: msgs::ControlCommand, json: bool) -> Result<ExitCode> {
     // Ids below 2^53 (JavaScript clients read them exactly).
     let id = crate::net::now_ns() & ((1u64 << 53) - 1);
     let req = msgs::ControlRequest { id, command };
     req.validate().map_err(|e| anyhow!("invalid request: {e}"))?;
     let link = common.open_zenoh()?;
     let reply = link.control(&req, common.timeout_or(5.0))?;
-    if args.json {
+    if json {
         println!("{}", serde_json::to_string(&reply)?);
     }
     if reply.id != id {
@@ -79,7 +83,7 @@ pub fn run(common: &Common, args: &Args) -> Result<ExitCode> {
     }
     match reply.outcome {
         msgs::ControlOutcome::Ok(s) => {
-            if !args.json {
+            if !json {
                 println!(
                     "ok: scene {}  {}  sequence {}  sim time {:.4} s  variant {}",
                     s.scene,

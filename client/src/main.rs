@@ -2,11 +2,12 @@
 //!
 //! | command | what it does | transports |
 //! |---|---|---|
-//! | `watch` | live table of solver stats and body poses | zenoh, iceoryx2 |
+//! | `watch` | live table of solver stats and body poses (`--signals`: sensor channels, contact states, events) | zenoh, iceoryx2 |
 //! | `drive` | keyboard or gamepad → joystick frames at 30–60 Hz | zenoh, iceoryx2 |
 //! | `send` | one winch, actuator, boom or joystick command | zenoh, iceoryx2 |
 //! | `scene` | the scene description (summary or JSON) | zenoh |
 //! | `control` | pause, resume, step, reset, solver variant, load scene | zenoh |
+//! | `fault` | inject a fault (rope break, hose burst, brake fade, sticking valve, sensor dropout) | zenoh |
 //! | `record` | poses, stats and inputs into an MCAP file Foxglove opens | zenoh, iceoryx2 |
 //! | `foxglove` | the world live in Foxglove (WebSocket on 127.0.0.1:8765): shapes, transforms, stats | zenoh, iceoryx2 |
 //! | `ping` | pose latency publish → receive, percentiles and histogram | zenoh, iceoryx2 |
@@ -18,6 +19,7 @@
 
 mod control;
 mod drive;
+mod fault;
 mod fox;
 mod foxglove_live;
 mod keymap;
@@ -26,6 +28,7 @@ mod ping;
 mod record;
 mod scene;
 mod send;
+mod signals;
 mod tojson;
 mod util;
 mod watch;
@@ -117,6 +120,8 @@ enum Command {
     Scene(scene::Args),
     /// Pause, resume, step, reset, switch the solver variant or load a scene.
     Control(control::Args),
+    /// Inject a fault (instructor station): break, hose_burst, brake_fade, stick_valve, dropout.
+    Fault(fault::Args),
     /// Record poses, stats and inputs into an MCAP file (Foxglove opens it).
     Record(record::Args),
     /// Pose latency, server publish → client receive.
@@ -141,6 +146,7 @@ fn main() -> std::process::ExitCode {
         Command::Send(a) => send::run(&cli.common, a),
         Command::Scene(a) => scene::run(&cli.common, a),
         Command::Control(a) => control::run(&cli.common, a),
+        Command::Fault(a) => fault::run(&cli.common, a),
         Command::Record(a) => record::run(&cli.common, a),
         Command::Ping(a) => ping::run(&cli.common, a),
         Command::Foxglove(a) => foxglove_live::run(&cli.common, a),

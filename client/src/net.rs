@@ -325,7 +325,7 @@ fn iox_topics(topics: &[Topic]) -> Result<Vec<(Option<Topic>, Topic)>> {
     let mut names: Vec<(Option<Topic>, Topic)> = Vec::new();
     for &t in topics {
         match t {
-            Topic::Poses | Topic::Stats => names.push((Some(t), t)),
+            Topic::Poses | Topic::Stats | Topic::Signals | Topic::Events => names.push((Some(t), t)),
             t if Topic::INPUTS.contains(&t) => {
                 if !names.iter().any(|(known, _)| known.is_none()) {
                     names.push((None, t));

@@ -43,6 +43,9 @@ pub struct Args {
     /// One JSON object per step (stats and poses).
     #[arg(long, conflicts_with = "plain")]
     pub json: bool,
+    /// Show the sensor channels, contact states and events (topics `signals`, `events`) instead.
+    #[arg(long)]
+    pub signals: bool,
 }
 
 #[derive(Clone, Copy, PartialEq)]
@@ -401,6 +404,9 @@ impl Steps {
 
 /// Runs `watch`.
 pub fn run(common: &Common, args: &Args) -> Result<ExitCode> {
+    if args.signals {
+        return crate::signals::run(common, args);
+    }
     let mode = Mode::of(args);
     let poll = Duration::from_micros(500);
     let stream = Stream::open(common, args.transport, &[Topic::Poses, Topic::Stats], 1024, poll, None)?;

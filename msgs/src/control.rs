@@ -7,6 +7,7 @@
 //! {"id":10,"command":{"op":"reset"}}
 //! {"id":11,"command":{"op":"set_variant","variant":"skyline"}}
 //! {"id":12,"command":{"op":"load_scene","scene":"winch"}}
+//! {"id":13,"command":{"op":"fault","fault":"break","target":"rope/end","tension":25000.0}}
 //!
 //! {"id":11,"outcome":{"ok":{"scene":"winch","paused":false,"sequence":420,"sim_time":7.0,"variant":"skyline"}}}
 //! {"id":11,"outcome":{"error":{"code":"unknown_variant","message":"no variant \"fast\""}}}
@@ -17,7 +18,9 @@
 //! names and applies from the next step. `load_scene` takes a scene name or path (1 ..= 256 bytes,
 //! no control characters) and starts it paused at time 0. The reply's `ok` carries the state after
 //! the request; `error` carries a code (`invalid_request`, `unknown_variant`, `unknown_scene`,
-//! `scene_load_failed`, `busy`, `internal`) and a message of at most 1024 bytes.
+//! `scene_load_failed`, `busy`, `fault_rejected`, `internal`) and a message of at most 1024 bytes.
+//! `fault` injects a fault (`break`, `hose_burst`, `brake_fade`, `stick_valve`, `dropout`) on a
+//! named joint, actuator or sensor; the scene checks the target (`fault_rejected` if it refuses).
 
 use crate::codes::SolverVariant;
 use crate::header::{DecodeError, Kind};
@@ -31,7 +34,7 @@ pub const MAX_SCENE_REF_LEN: usize = 256;
 pub const MAX_MESSAGE_LEN: usize = 1024;
 
 /// A control request.
-#[derive(Debug, Clone, PartialEq, Eq, serde::Serialize)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
 pub struct ControlRequest {
     /// Echoed by the reply (keep below 2^53 for JavaScript clients).
     pub id: u64,
@@ -40,7 +43,7 @@ pub struct ControlRequest {
 }
 
 /// What a control request asks for.
-#[derive(Debug, Clone, PartialEq, Eq, serde::Serialize)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
 #[serde(tag = "op", rename_all = "snake_case")]
 pub enum ControlCommand {
     /// Stop stepping (publishing continues with the last state).
@@ -64,7 +67,70 @@ pub enum ControlCommand {
         /// Scene name or path.
         scene: String,
     },
+    /// Inject a fault (an instructor station): reported as an event of the next step.
+    Fault {
+        /// What breaks.
+        fault: FaultKind,
+        /// The joint (`break`), actuator (`hose_burst`, `brake_fade`, `stick_valve`) or sensor
+        /// (`dropout`), by its scene name (1 ..= 64 bytes, no control characters).
+        target: String,
+        /// `break`: the rope parts when its tension exceeds this (N, > 0); absent: now.
+        #[serde(skip_serializing_if = "Option::is_none")]
+        tension: Option<f64>,
+        /// `brake_fade`: final fraction of the brake's bound, in [0, 1] (absent: 0).
+        #[serde(skip_serializing_if = "Option::is_none")]
+        to: Option<f64>,
+        /// `brake_fade`: seconds of the ramp, ≥ 0 (absent: 0).
+        #[serde(skip_serializing_if = "Option::is_none")]
+        ramp: Option<f64>,
+    },
 }
+
+/// The faults an instructor can inject (`scenes/README.md`, `[[fault]]`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum FaultKind {
+    /// A joint is disabled (a rope or cable parts).
+    Break,
+    /// An actuator goes limp.
+    HoseBurst,
+    /// A brake's force bound ramps down.
+    BrakeFade,
+    /// An actuator freezes at its applied value.
+    StickValve,
+    /// A sensor gives no reading.
+    Dropout,
+}
+
+impl FaultKind {
+    /// Every kind.
+    pub const ALL: [FaultKind; 5] = [
+        FaultKind::Break,
+        FaultKind::HoseBurst,
+        FaultKind::BrakeFade,
+        FaultKind::StickValve,
+        FaultKind::Dropout,
+    ];
+
+    /// The wire (and scene file) name.
+    pub fn name(self) -> &'static str {
+        match self {
+            FaultKind::Break => "break",
+            FaultKind::HoseBurst => "hose_burst",
+            FaultKind::BrakeFade => "brake_fade",
+            FaultKind::StickValve => "stick_valve",
+            FaultKind::Dropout => "dropout",
+        }
+    }
+
+    /// The kind of a name.
+    pub fn from_name(s: &str) -> Option<FaultKind> {
+        FaultKind::ALL.into_iter().find(|k| k.name() == s)
+    }
+}
+
+/// Longest fault target name, in bytes (a scene's joint, actuator or sensor name).
+pub const MAX_FAULT_TARGET_LEN: usize = 64;
 
 /// A reply to a control request.
 #[derive(Debug, Clone, PartialEq, serde::Serialize)]
@@ -125,6 +191,9 @@ pub enum ControlErrorCode {
     SceneLoadFailed,
     /// The server cannot do it now (e.g. `step` while running).
     Busy,
+    /// A `fault` the scene refused: an unknown target, a target of the wrong kind, a value out of
+    /// range (counted as a `fault-rejected` event).
+    FaultRejected,
     /// Anything else.
     Internal,
 }
@@ -171,6 +240,26 @@ pub enum ControlError {
         /// The value.
         value: f64,
     },
+    /// Not one of the fault kinds.
+    #[error("unknown fault kind {name:?}")]
+    UnknownFault {
+        /// The name sent.
+        name: String,
+    },
+    /// An empty or too long fault target, or one with a control character.
+    #[error("fault target of {len} bytes (1 ..= {MAX_FAULT_TARGET_LEN}, no control characters)")]
+    FaultTarget {
+        /// Length in bytes.
+        len: usize,
+    },
+    /// A fault value that is not finite or out of its range.
+    #[error("fault `{field}` = {value} is out of range")]
+    FaultValue {
+        /// The field.
+        field: &'static str,
+        /// The value.
+        value: f64,
+    },
     /// The encoded payload exceeds the kind's maximum (encode only).
     #[error("encoded payload of {len} bytes exceeds the maximum")]
     TooLarge {
@@ -191,6 +280,9 @@ impl ControlError {
             | ControlError::SceneChar { .. }
             | ControlError::MessageTooLong { .. }
             | ControlError::SimTime { .. }
+            | ControlError::UnknownFault { .. }
+            | ControlError::FaultTarget { .. }
+            | ControlError::FaultValue { .. }
             | ControlError::TooLarge { .. } => ControlErrorCode::InvalidRequest,
         }
     }
@@ -230,10 +322,26 @@ mod raw {
         // fields next to the tag.
         Pause {},
         Resume {},
-        Step { count: u32 },
+        Step {
+            count: u32,
+        },
         Reset {},
-        SetVariant { variant: String },
-        LoadScene { scene: String },
+        SetVariant {
+            variant: String,
+        },
+        LoadScene {
+            scene: String,
+        },
+        Fault {
+            fault: String,
+            target: String,
+            #[serde(default)]
+            tension: Option<f64>,
+            #[serde(default)]
+            to: Option<f64>,
+            #[serde(default)]
+            ramp: Option<f64>,
+        },
     }
 
     #[derive(serde::Deserialize)]
@@ -269,6 +377,21 @@ impl ControlRequest {
                 Err(ControlError::StepCount { count: *count })
             }
             ControlCommand::LoadScene { scene } => check_scene_ref(scene),
+            ControlCommand::Fault { target, tension, to, ramp, .. } => {
+                if target.is_empty()
+                    || target.len() > MAX_FAULT_TARGET_LEN
+                    || target.bytes().any(|b| b.is_ascii_control())
+                {
+                    return Err(ControlError::FaultTarget { len: target.len() });
+                }
+                let check = |field, v: Option<f64>, ok: fn(f64) -> bool| match v {
+                    Some(value) if !ok(value) => Err(ControlError::FaultValue { field, value }),
+                    _ => Ok(()),
+                };
+                check("tension", *tension, |x| x.is_finite() && x > 0.0)?;
+                check("to", *to, |x| (0.0..=1.0).contains(&x))?;
+                check("ramp", *ramp, |x| x.is_finite() && x >= 0.0)
+            }
             _ => Ok(()),
         }
     }
@@ -310,6 +433,14 @@ impl ControlRequest {
                 ControlCommand::SetVariant { variant: variant(v).map_err(DecodeError::Invalid)? }
             }
             raw::Command::LoadScene { scene } => ControlCommand::LoadScene { scene },
+            raw::Command::Fault { fault, target, tension, to, ramp } => ControlCommand::Fault {
+                fault: FaultKind::from_name(&fault)
+                    .ok_or(DecodeError::Invalid(ControlError::UnknownFault { name: fault }))?,
+                target,
+                tension,
+                to,
+                ramp,
+            },
         };
         let req = ControlRequest { id: r.id, command };
         req.validate().map_err(DecodeError::Invalid)?;

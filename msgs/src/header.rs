@@ -20,7 +20,7 @@ use crate::le;
 /// First four bytes of every frame.
 pub const MAGIC: [u8; 4] = *b"PVSM";
 /// Version written by this crate and the only one it decodes.
-pub const FORMAT_VERSION: u16 = 2;
+pub const FORMAT_VERSION: u16 = 3;
 /// Bytes of the header.
 pub const HEADER_LEN: usize = 16;
 /// Largest frame of any kind, header included (16 MiB).
@@ -34,6 +34,10 @@ pub enum Kind {
     PoseFrame = 0x0001,
     /// [`SolverStats`](crate::SolverStats), binary.
     SolverStats = 0x0002,
+    /// [`SignalsFrame`](crate::SignalsFrame), binary.
+    Signals = 0x0003,
+    /// [`EventsFrame`](crate::EventsFrame), binary.
+    Events = 0x0004,
     /// [`Joystick`](crate::Joystick), binary.
     Joystick = 0x0010,
     /// [`WinchCommand`](crate::WinchCommand), binary.
@@ -51,10 +55,12 @@ pub enum Kind {
 }
 
 impl Kind {
-    /// Every kind of version 1, in code order.
-    pub const ALL: [Kind; 9] = [
+    /// Every kind of this version, in code order.
+    pub const ALL: [Kind; 11] = [
         Kind::PoseFrame,
         Kind::SolverStats,
+        Kind::Signals,
+        Kind::Events,
         Kind::Joystick,
         Kind::Winch,
         Kind::Boom,
@@ -80,6 +86,8 @@ impl Kind {
         match self {
             Kind::PoseFrame => "pose-frame",
             Kind::SolverStats => "solver-stats",
+            Kind::Signals => "signals",
+            Kind::Events => "events",
             Kind::Joystick => "joystick",
             Kind::Winch => "winch",
             Kind::Boom => "boom",
@@ -102,6 +110,10 @@ impl Kind {
         match self {
             Kind::PoseFrame => POSE_FIXED_LEN + BODY_RECORD_LEN * MAX_BODIES,
             Kind::SolverStats => STATS_FIXED_LEN + ISLAND_RECORD_LEN * MAX_ISLANDS,
+            Kind::Signals => {
+                SIGNALS_FIXED_LEN + CHANNEL_RECORD_LEN * MAX_CHANNELS + CONTACT_RECORD_LEN * MAX_CONTACTS
+            }
+            Kind::Events => EVENTS_FIXED_LEN + EVENT_RECORD_LEN * MAX_EVENTS,
             Kind::Joystick => JOYSTICK_LEN,
             Kind::Winch => WINCH_LEN,
             Kind::Boom => BOOM_FIXED_LEN + BOOM_ENTRY_LEN * MAX_BOOM_TARGETS,
@@ -348,7 +360,7 @@ mod tests {
             assert_eq!(k.is_json(), k.code() >= 0x100);
             assert!(HEADER_LEN + k.max_payload_len() <= MAX_FRAME_LEN, "{k}");
         }
-        assert_eq!(Kind::from_code(0x0003), None);
+        assert_eq!(Kind::from_code(0x0005), None);
     }
 
     #[test]
@@ -359,8 +371,8 @@ mod tests {
         b[0] = b'X';
         assert!(matches!(peek(&b), Err(FrameError::BadMagic { .. })));
         let mut b = ok.clone();
-        b[4] = 3;
-        assert_eq!(peek(&b), Err(FrameError::UnsupportedVersion { found: 3 }));
+        b[4] = 2;
+        assert_eq!(peek(&b), Err(FrameError::UnsupportedVersion { found: 2 }));
         let mut b = ok.clone();
         b[6] = 0x77;
         assert_eq!(peek(&b), Err(FrameError::UnknownKind { found: 0x77 }));

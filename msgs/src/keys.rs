@@ -6,6 +6,8 @@
 //! |---|---|---|---|
 //! | [`Topic::Poses`] | `poses` | server publishes | pose frame `0x0001` |
 //! | [`Topic::Stats`] | `stats` | server publishes | solver stats `0x0002` |
+//! | [`Topic::Signals`] | `signals` | server publishes | signals `0x0003` |
+//! | [`Topic::Events`] | `events` | server publishes | events `0x0004` |
 //! | [`Topic::Joystick`] | `cmd/joystick` | server subscribes | joystick `0x0010` |
 //! | [`Topic::Winch`] | `cmd/winch` | server subscribes | winch `0x0011` |
 //! | [`Topic::Boom`] | `cmd/boom` | server subscribes | boom `0x0012` |
@@ -107,7 +109,7 @@ impl WorldName {
     /// queryables (Zenoh only).
     pub fn iox_service(&self, topic: Topic) -> Option<String> {
         match topic {
-            Topic::Poses | Topic::Stats => Some(self.key(topic)),
+            Topic::Poses | Topic::Stats | Topic::Signals | Topic::Events => Some(self.key(topic)),
             Topic::Joystick | Topic::Winch | Topic::Boom | Topic::Actuator => {
                 Some(format!("{KEY_PREFIX}/{}/{IOX_INPUT_SERVICE}", self.0))
             }
@@ -160,6 +162,10 @@ pub enum Topic {
     Poses,
     /// Solver stats, published every step.
     Stats,
+    /// Sensor channels and contact states, published every step.
+    Signals,
+    /// Threshold crossings and faults, published at the steps that have them.
+    Events,
     /// Joystick inputs.
     Joystick,
     /// Winch commands.
@@ -176,9 +182,11 @@ pub enum Topic {
 
 impl Topic {
     /// Every topic.
-    pub const ALL: [Topic; 8] = [
+    pub const ALL: [Topic; 10] = [
         Topic::Poses,
         Topic::Stats,
+        Topic::Signals,
+        Topic::Events,
         Topic::Joystick,
         Topic::Winch,
         Topic::Boom,
@@ -195,6 +203,8 @@ impl Topic {
         match self {
             Topic::Poses => "poses",
             Topic::Stats => "stats",
+            Topic::Signals => "signals",
+            Topic::Events => "events",
             Topic::Joystick => "cmd/joystick",
             Topic::Winch => "cmd/winch",
             Topic::Boom => "cmd/boom",
@@ -216,6 +226,8 @@ impl Topic {
         Some(match self {
             Topic::Poses => Kind::PoseFrame,
             Topic::Stats => Kind::SolverStats,
+            Topic::Signals => Kind::Signals,
+            Topic::Events => Kind::Events,
             Topic::Joystick => Kind::Joystick,
             Topic::Winch => Kind::Winch,
             Topic::Boom => Kind::Boom,
@@ -281,6 +293,8 @@ mod tests {
             [
                 "pivotsim/crane-1/poses",
                 "pivotsim/crane-1/stats",
+                "pivotsim/crane-1/signals",
+                "pivotsim/crane-1/events",
                 "pivotsim/crane-1/cmd/joystick",
                 "pivotsim/crane-1/cmd/winch",
                 "pivotsim/crane-1/cmd/boom",

@@ -31,3 +31,21 @@ pub const STATS_FIXED_LEN: usize = 176;
 pub const ISLAND_RECORD_LEN: usize = 40;
 /// Most islands in one frame.
 pub const MAX_ISLANDS: usize = 65_535;
+
+// Signals and events (`signals.rs`).
+/// Bytes of the fixed part of a signals frame's payload.
+pub const SIGNALS_FIXED_LEN: usize = 40;
+/// Bytes of one channel record.
+pub const CHANNEL_RECORD_LEN: usize = 48;
+/// Bytes of one contact record.
+pub const CONTACT_RECORD_LEN: usize = 56;
+/// Most channels in one frame.
+pub const MAX_CHANNELS: usize = 4096;
+/// Most contact records in one frame.
+pub const MAX_CONTACTS: usize = 4096;
+/// Bytes of the fixed part of an events frame's payload.
+pub const EVENTS_FIXED_LEN: usize = 32;
+/// Bytes of one event record.
+pub const EVENT_RECORD_LEN: usize = 64;
+/// Most events in one frame.
+pub const MAX_EVENTS: usize = 1024;

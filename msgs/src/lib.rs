@@ -29,12 +29,14 @@ mod message;
 mod name;
 mod pose;
 mod scene;
+mod signals;
 mod stats;
 
 pub use codes::{ActuatorMode, REJECT_REASONS, RejectReason, SolveStatus, SolverVariant};
 pub use control::{
     ControlCommand, ControlError, ControlErrorCode, ControlFailure, ControlOutcome, ControlReply,
-    ControlRequest, MAX_MESSAGE_LEN, MAX_SCENE_REF_LEN, MAX_STEP_COUNT, ServerStatus,
+    ControlRequest, FaultKind, MAX_FAULT_TARGET_LEN, MAX_MESSAGE_LEN, MAX_SCENE_REF_LEN, MAX_STEP_COUNT,
+    ServerStatus,
 };
 pub use header::{DecodeError, FORMAT_VERSION, FrameError, HEADER_LEN, Header, Kind, MAGIC, MAX_FRAME_LEN};
 pub use input::{
@@ -52,6 +54,11 @@ pub use pose::{
     MAX_BODIES, POSE_FIXED_LEN, PoseError, PoseFrame, PoseFrameView, PoseFrameWriter, QUAT_NORM_TOLERANCE,
 };
 pub use scene::*;
+pub use signals::{
+    CHANNEL_DROPOUT, CHANNEL_RECORD_LEN, CONTACT_RECORD_LEN, ContactCode, ContactRecord, EVENT_RECORD_LEN,
+    EVENTS_FIXED_LEN, EventCode, EventRecord, EventsFrame, MAX_CHANNELS, MAX_CONTACTS, MAX_EVENTS,
+    SIGNALS_FIXED_LEN, SignalChannel, SignalsError, SignalsFrame,
+};
 pub use stats::{
     DegradedSolves, ISLAND_FALLBACK, ISLAND_RECORD_LEN, InputHealth, IslandStats, MAX_ISLANDS,
     STATS_FIXED_LEN, SolverStats, StatsError, StepTotals,

@@ -9,6 +9,7 @@ use crate::header::{self, DecodeError, FrameError, Kind};
 use crate::input::{InputCommand, InputError};
 use crate::pose::{PoseError, PoseFrame};
 use crate::scene::{SceneDescription, SceneError};
+use crate::signals::{EventsFrame, SignalsError, SignalsFrame};
 use crate::stats::{SolverStats, StatsError};
 
 /// A decoded frame of any kind.
@@ -18,6 +19,10 @@ pub enum Message {
     Pose(PoseFrame),
     /// `0x0002`.
     Stats(SolverStats),
+    /// `0x0003`.
+    Signals(SignalsFrame),
+    /// `0x0004`.
+    Events(EventsFrame),
     /// `0x0010..=0x0013`.
     Input(InputCommand),
     /// `0x0100`.
@@ -40,6 +45,9 @@ pub enum MessageError {
     /// Stats content.
     #[error(transparent)]
     Stats(#[from] StatsError),
+    /// Signals or events content.
+    #[error(transparent)]
+    Signals(#[from] SignalsError),
     /// Input content.
     #[error(transparent)]
     Input(#[from] InputError),
@@ -70,6 +78,8 @@ impl Message {
         match self {
             Message::Pose(_) => Kind::PoseFrame,
             Message::Stats(_) => Kind::SolverStats,
+            Message::Signals(_) => Kind::Signals,
+            Message::Events(_) => Kind::Events,
             Message::Input(i) => i.kind(),
             Message::ControlRequest(_) => Kind::ControlRequest,
             Message::ControlReply(_) => Kind::ControlReply,
@@ -82,6 +92,8 @@ impl Message {
         Ok(match header::peek(bytes)?.kind {
             Kind::PoseFrame => Message::Pose(PoseFrame::decode(bytes)?),
             Kind::SolverStats => Message::Stats(SolverStats::decode(bytes)?),
+            Kind::Signals => Message::Signals(SignalsFrame::decode(bytes)?),
+            Kind::Events => Message::Events(EventsFrame::decode(bytes)?),
             Kind::Joystick | Kind::Winch | Kind::Boom | Kind::Actuator => {
                 Message::Input(InputCommand::decode(bytes)?)
             }
@@ -96,6 +108,8 @@ impl Message {
         match self {
             Message::Pose(m) => m.encode(buf)?,
             Message::Stats(m) => m.encode(buf)?,
+            Message::Signals(m) => m.encode(buf)?,
+            Message::Events(m) => m.encode(buf)?,
             Message::Input(m) => m.encode(buf)?,
             Message::ControlRequest(m) => m.encode(buf)?,
             Message::ControlReply(m) => m.encode(buf)?,

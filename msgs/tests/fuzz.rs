@@ -13,6 +13,8 @@ fn decode_all(b: &[u8]) -> Result<Message, MessageError> {
     let _ = PoseFrameView::parse(b).map(|v| v.bodies().map(|x| x.id).sum::<u32>());
     let _ = PoseFrame::decode(b);
     let _ = SolverStats::decode(b);
+    let _ = SignalsFrame::decode(b);
+    let _ = EventsFrame::decode(b);
     let _ = InputCommand::decode(b);
     let _ = ControlRequest::decode(b);
     let _ = ControlReply::decode(b);
@@ -122,6 +124,10 @@ fn random_payloads_under_valid_headers_never_panic() {
             0 => rng.below(64),
             1 => rng.below(400),
             2 => 32 + 112 * rng.below(4),
+            3 if rng.below(2) == 0 => match rng.below(2) {
+                0 => 40 + 48 * rng.below(3) + 56 * rng.below(3),
+                _ => 32 + 64 * rng.below(4),
+            },
             _ => 176 + 40 * rng.below(4),
         };
         let mut b = Vec::with_capacity(HEADER_LEN + len);

@@ -67,6 +67,21 @@ fn golden_winch_command() {
     assert_eq!(InputCommand::decode(&want).unwrap(), cmd);
 }
 
+#[test]
+fn golden_signals_and_events() {
+    let want = hex_dump("<!-- golden:signals -->");
+    let mut got = Vec::new();
+    sample_signals().encode(&mut got).unwrap();
+    assert_eq!(got, want, "encoded:\n{}", dump(&got));
+    assert_eq!(want.len(), 160);
+    assert_eq!(SignalsFrame::decode(&want).unwrap(), sample_signals());
+    let want = hex_dump("<!-- golden:events -->");
+    sample_events().encode(&mut got).unwrap();
+    assert_eq!(got, want, "encoded:\n{}", dump(&got));
+    assert_eq!(want.len(), 112);
+    assert_eq!(EventsFrame::decode(&want).unwrap(), sample_events());
+}
+
 fn json_frame(kind: Kind, json: &str) -> Vec<u8> {
     let mut b = Vec::new();
     b.extend_from_slice(&MAGIC);
@@ -81,7 +96,7 @@ fn json_frame(kind: Kind, json: &str) -> Vec<u8> {
 #[test]
 fn readme_control_examples_decode_and_encode_identically() {
     let requests = block_after("<!-- example:control-request -->");
-    assert_eq!(requests.len(), 6);
+    assert_eq!(requests.len(), 8);
     let mut buf = Vec::new();
     for line in requests {
         let r = ControlRequest::decode(&json_frame(Kind::ControlRequest, line))
@@ -136,6 +151,8 @@ fn readme_sizes_match_the_constants() {
     }
     assert_eq!(HEADER_LEN + POSE_FIXED_LEN, 48);
     assert_eq!(HEADER_LEN + STATS_FIXED_LEN, 192);
+    assert_eq!(HEADER_LEN + SIGNALS_FIXED_LEN, 56);
+    assert_eq!(HEADER_LEN + EVENTS_FIXED_LEN, 48);
     assert_eq!(HEADER_LEN + BOOM_FIXED_LEN, 32);
     assert_eq!(HEADER_LEN + JOYSTICK_LEN, 168);
     assert_eq!(HEADER_LEN + WINCH_LEN, 72);

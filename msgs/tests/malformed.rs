@@ -76,12 +76,12 @@ fn bad_magic_version_kind_flags() {
     let mut m = b.clone();
     m[..4].copy_from_slice(b"PVSX");
     assert_eq!(frame_err(&m), FrameError::BadMagic { found: *b"PVSX" });
-    for version in [0u16, 1, 3, 0xFFFF] {
+    for version in [0u16, 1, 2, 4, 0xFFFF] {
         let mut v = b.clone();
         v[4..6].copy_from_slice(&version.to_le_bytes());
         assert_eq!(frame_err(&v), FrameError::UnsupportedVersion { found: version });
     }
-    for code in [0u16, 3, 0x0014, 0x0103, 0x0200, 0xFFFF] {
+    for code in [0u16, 5, 0x0014, 0x0103, 0x0200, 0xFFFF] {
         let mut k = b.clone();
         k[6..8].copy_from_slice(&code.to_le_bytes());
         assert_eq!(frame_err(&k), FrameError::UnknownKind { found: code });
@@ -542,4 +542,116 @@ fn inputs_against_the_scene() {
         ],
     });
     assert_eq!(s.check_input(&boom), Err(InputError::UnknownActuator { name: "stick".into() }));
+}
+
+#[test]
+fn signals_and_events_content_errors() {
+    let frames = sample_frames();
+    let b = &frames.iter().find(|(k, _)| *k == Kind::Signals).unwrap().1;
+    let inv = |c: &[u8]| SignalsFrame::decode(c).unwrap_err();
+    let ch0 = HEADER_LEN + SIGNALS_FIXED_LEN;
+    let ct0 = ch0 + 2 * CHANNEL_RECORD_LEN;
+    let cases: Vec<(usize, f64, SignalsError)> = vec![
+        (HEADER_LEN + 8, f64::NAN, SignalsError::NonFinite { record: None, field: "sim_time" }),
+        (HEADER_LEN + 8, -0.5, SignalsError::Negative { record: None, field: "sim_time", value: -0.5 }),
+        (ch0 + 40, f64::INFINITY, SignalsError::NonFinite { record: Some(0), field: "value" }),
+        (ch0 + CHANNEL_RECORD_LEN + 40, 2.0, SignalsError::DropoutValue { record: 1, value: 2.0 }),
+        (ct0 + 16, f64::NAN, SignalsError::NonFinite { record: Some(0), field: "point" }),
+        (ct0 + 40, -1.0, SignalsError::Negative { record: Some(0), field: "normal_force", value: -1.0 }),
+        (ct0 + 48, f64::NAN, SignalsError::NonFinite { record: Some(0), field: "friction_force" }),
+    ];
+    for (off, v, want) in cases {
+        let mut c = b.clone();
+        set_f64(&mut c, off, v);
+        assert_eq!(inv(&c), DecodeError::Invalid(want), "offset {off}");
+    }
+    let mut c = b.clone();
+    set_u32(&mut c, ch0 + 32, 4);
+    assert_eq!(inv(&c), DecodeError::Invalid(SignalsError::ChannelFlags { record: 0, flags: 4 }));
+    let mut c = b.clone();
+    c[ch0 + 36] = 1;
+    assert_eq!(inv(&c), DecodeError::Frame(FrameError::ReservedNonZero { offset: ch0 + 36 }));
+    let mut c = b.clone();
+    c[ch0 + 20] = b'x'; // after the name's NUL
+    assert!(matches!(inv(&c), DecodeError::Invalid(SignalsError::Name { record: 0, .. })));
+    let mut c = b.clone();
+    c[ct0 + 8] = 3;
+    assert!(matches!(inv(&c), DecodeError::Invalid(SignalsError::UnknownCode { what: "contact state", .. })));
+    let mut c = b.clone();
+    set_u32(&mut c, HEADER_LEN + 16, MAX_CHANNELS as u32 + 1);
+    assert!(matches!(inv(&c), DecodeError::Invalid(SignalsError::TooMany { what: "channels", .. })));
+    let mut c = b.clone();
+    set_u32(&mut c, HEADER_LEN + 20, 2);
+    assert!(matches!(inv(&c), DecodeError::Frame(FrameError::PayloadLength { .. })));
+
+    let e = &frames.iter().find(|(k, _)| *k == Kind::Events).unwrap().1;
+    let inv = |c: &[u8]| EventsFrame::decode(c).unwrap_err();
+    let r0 = HEADER_LEN + EVENTS_FIXED_LEN;
+    let mut c = e.clone();
+    set_f64(&mut c, r0 + 40, -1.0);
+    assert_eq!(
+        inv(&c),
+        DecodeError::Invalid(SignalsError::Negative { record: Some(0), field: "time", value: -1.0 })
+    );
+    let mut c = e.clone();
+    set_f64(&mut c, r0 + 56, f64::NAN);
+    assert_eq!(inv(&c), DecodeError::Invalid(SignalsError::NonFinite { record: Some(0), field: "level" }));
+    let mut c = e.clone();
+    c[r0 + 32] = 9;
+    assert!(matches!(
+        inv(&c),
+        DecodeError::Invalid(SignalsError::UnknownCode { what: "event kind", code: 9, .. })
+    ));
+    let mut c = e.clone();
+    c[r0 + 39] = 1;
+    assert_eq!(inv(&c), DecodeError::Frame(FrameError::ReservedNonZero { offset: r0 + 39 }));
+    let mut c = e.clone();
+    set_u32(&mut c, HEADER_LEN + 16, MAX_EVENTS as u32 + 1);
+    assert!(matches!(inv(&c), DecodeError::Invalid(SignalsError::TooMany { what: "events", .. })));
+    assert!(matches!(SignalsFrame::decode(e), Err(DecodeError::Frame(FrameError::WrongKind { .. }))));
+}
+
+#[test]
+fn fault_request_errors() {
+    let req = |json: &str| ControlRequest::decode(&json_frame(Kind::ControlRequest, json));
+    let ok = req(r#"{"id":1,"command":{"op":"fault","fault":"break","target":"rope/end","tension":2000.0}}"#);
+    assert!(matches!(
+        ok,
+        Ok(ControlRequest { command: ControlCommand::Fault { fault: FaultKind::Break, .. }, .. })
+    ));
+    let ok = req(r#"{"id":1,"command":{"op":"fault","fault":"dropout","target":"lmi"}}"#).unwrap();
+    assert!(matches!(ok.command, ControlCommand::Fault { tension: None, to: None, ramp: None, .. }));
+    let bad = |json: &str| req(json).unwrap_err();
+    assert!(matches!(
+        bad(r#"{"id":1,"command":{"op":"fault","fault":"explode","target":"x"}}"#),
+        DecodeError::Invalid(ControlError::UnknownFault { .. })
+    ));
+    assert!(matches!(
+        bad(r#"{"id":1,"command":{"op":"fault","fault":"break","target":""}}"#),
+        DecodeError::Invalid(ControlError::FaultTarget { len: 0 })
+    ));
+    assert!(matches!(
+        bad(r#"{"id":1,"command":{"op":"fault","fault":"break","target":"a","tension":-1.0}}"#),
+        DecodeError::Invalid(ControlError::FaultValue { field: "tension", .. })
+    ));
+    assert!(matches!(
+        bad(r#"{"id":1,"command":{"op":"fault","fault":"brake_fade","target":"a","to":1.5}}"#),
+        DecodeError::Invalid(ControlError::FaultValue { field: "to", .. })
+    ));
+    assert!(matches!(
+        bad(r#"{"id":1,"command":{"op":"fault","fault":"break","target":"a","oops":1}}"#),
+        DecodeError::Frame(FrameError::Json { .. })
+    ));
+    let nan = ControlRequest {
+        id: 1,
+        command: ControlCommand::Fault {
+            fault: FaultKind::BrakeFade,
+            target: "brake".into(),
+            tension: None,
+            to: None,
+            ramp: Some(f64::NAN),
+        },
+    };
+    let mut buf = Vec::new();
+    assert!(nan.encode(&mut buf).is_err() && buf.is_empty());
 }

@@ -5,4 +5,5 @@ pub mod dynamics;
 pub mod run;
 pub mod scene;
 pub mod serve;
+pub mod signals;
 pub mod solver;

@@ -179,6 +179,20 @@ pub fn control_request() -> impl Strategy<Value = ControlRequest> {
         prop::sample::select(SolverVariant::ALL.to_vec())
             .prop_map(|variant| ControlCommand::SetVariant { variant }),
         scene_ref().prop_map(|scene| ControlCommand::LoadScene { scene }),
+        (
+            prop::sample::select(FaultKind::ALL.to_vec()),
+            "[A-Za-z0-9_./-]{1,64}",
+            prop::option::of(1e-3..1e7f64),
+            prop::option::of(0.0..=1.0f64),
+            prop::option::of(0.0..100.0f64),
+        )
+            .prop_map(|(fault, target, tension, to, ramp)| ControlCommand::Fault {
+                fault,
+                target,
+                tension,
+                to,
+                ramp
+            }),
     ];
     (any::<u64>(), command).prop_map(|(id, command)| ControlRequest { id, command })
 }
@@ -493,6 +507,12 @@ pub fn sample_frames() -> Vec<(Kind, Vec<u8>)> {
         }),
         Message::ControlReply(ControlReply::error(3, ControlErrorCode::Busy, "stepping")),
         Message::Scene(sample_scene()),
+        Message::Signals({
+            let mut s = sample_signals();
+            s.channels.push(SignalChannel { name: name("lmi/percent"), dropout: true, value: 0.0 });
+            s
+        }),
+        Message::Events(sample_events()),
     ];
     msgs.iter()
         .map(|m| {
@@ -501,4 +521,99 @@ pub fn sample_frames() -> Vec<(Kind, Vec<u8>)> {
             (m.kind(), b)
         })
         .collect()
+}
+
+pub fn signal_channel() -> impl Strategy<Value = SignalChannel> {
+    (actuator_name(), any::<bool>(), finite()).prop_map(|(name, dropout, value)| SignalChannel {
+        name,
+        dropout,
+        value: if dropout { 0.0 } else { value },
+    })
+}
+
+pub fn contact_record() -> impl Strategy<Value = ContactRecord> {
+    (any::<(u32, u32)>(), 0u8..3, vec3(), non_negative(), non_negative()).prop_map(
+        |((a, b), s, point, n, f)| ContactRecord {
+            body_a: a,
+            body_b: b,
+            state: ContactCode::from_code(s).unwrap(),
+            point,
+            normal_force: n,
+            friction_force: f,
+        },
+    )
+}
+
+pub fn signals_frame() -> impl Strategy<Value = SignalsFrame> {
+    (
+        any::<u64>(),
+        non_negative(),
+        any::<(u64, u32, u32)>(),
+        prop::collection::vec(signal_channel(), 0..16),
+        prop::collection::vec(contact_record(), 0..8),
+    )
+        .prop_map(
+            |(sequence, sim_time, (events_total, faults_applied, faults_rejected), channels, contacts)| {
+                SignalsFrame {
+                    sequence,
+                    sim_time,
+                    events_total,
+                    faults_applied,
+                    faults_rejected,
+                    channels,
+                    contacts,
+                }
+            },
+        )
+}
+
+pub fn events_frame() -> impl Strategy<Value = EventsFrame> {
+    let event = (actuator_name(), 0u8..4, non_negative(), finite(), finite()).prop_map(
+        |(name, k, time, value, level)| EventRecord {
+            name,
+            kind: EventCode::from_code(k).unwrap(),
+            time,
+            value,
+            level,
+        },
+    );
+    (any::<u64>(), non_negative(), any::<u64>(), prop::collection::vec(event, 0..8)).prop_map(
+        |(sequence, sim_time, events_total, events)| EventsFrame { sequence, sim_time, events_total, events },
+    )
+}
+
+/// The golden signals frame of the README.
+pub fn sample_signals() -> SignalsFrame {
+    SignalsFrame {
+        sequence: 12,
+        sim_time: 0.2,
+        events_total: 3,
+        faults_applied: 1,
+        faults_rejected: 0,
+        channels: vec![SignalChannel { name: name("hoist/hook"), dropout: false, value: 19620.0 }],
+        contacts: vec![ContactRecord {
+            body_a: 5,
+            body_b: 0,
+            state: ContactCode::Slip,
+            point: [1.0, -0.5, 0.0],
+            normal_force: 400.0,
+            friction_force: 200.0,
+        }],
+    }
+}
+
+/// The golden events frame of the README.
+pub fn sample_events() -> EventsFrame {
+    EventsFrame {
+        sequence: 12,
+        sim_time: 0.2,
+        events_total: 3,
+        events: vec![EventRecord {
+            name: name("rope-parted"),
+            kind: EventCode::Fault,
+            time: 0.2,
+            value: 1997.0,
+            level: 1962.0,
+        }],
+    }
 }

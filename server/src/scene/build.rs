@@ -16,8 +16,8 @@ use toml::Spanned;
 
 use super::checks::{R, Source};
 use super::controls::{
-    Actuator, ActuatorKind, ActuatorTarget, AxisMode, ButtonAction, Controls, JoyAxis, JoyButton,
-    JoystickMap, Neutral, SceneEvent, Script, ScriptEntry,
+    Actuator, ActuatorFault, ActuatorKind, ActuatorTarget, AxisMode, ButtonAction, Controls, JoyAxis,
+    JoyButton, JoystickMap, Neutral, SceneEvent, Script, ScriptEntry,
 };
 use super::format::*;
 use super::{Scene, SceneError};
@@ -590,6 +590,9 @@ pub(crate) fn build(file: &str, text: &str) -> R<Scene> {
         None => JoystickMap::default(),
     };
     let script = script(&b, &controls, &parsed.script)?;
+    let mut signals = super::signals::build_signals(&src, &b.world, &parsed.sensor, &parsed.event)?;
+    let faults = super::signals::build_faults(&src, &b.world, &controls, &mut signals, &parsed.fault)?;
+    let declared_faults = faults.list().len();
     let mut world = b.world;
     let mut controls = controls;
     // The initial actuator values are in force from the first step on.
@@ -608,6 +611,9 @@ pub(crate) fn build(file: &str, text: &str) -> R<Scene> {
         script,
         joystick,
         watchdog,
+        signals,
+        faults,
+        declared_faults,
     })
 }
 
@@ -918,6 +924,7 @@ fn actuator(
         value: initial,
         applied: initial,
         initial,
+        fault: ActuatorFault::None,
     })
 }
 

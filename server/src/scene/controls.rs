@@ -92,6 +92,22 @@ pub struct Actuator {
     pub(crate) applied: f64,
     /// Value at load (for reset).
     pub(crate) initial: f64,
+    /// A fault acting on it (`faults.rs`).
+    pub(crate) fault: ActuatorFault,
+}
+
+/// A fault on an actuator's hydraulics or brake (`faults.rs`).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub enum ActuatorFault {
+    /// Healthy.
+    #[default]
+    None,
+    /// Hose burst: its joints go limp (no motor at all).
+    Limp,
+    /// Sticking valve: the applied value stays where it is, whatever is commanded.
+    Frozen,
+    /// Brake fade: the force bound is scaled by this factor (1 → healthy, 0 → no force).
+    Fade(f64),
 }
 
 impl Actuator {
@@ -130,6 +146,10 @@ impl Actuator {
     /// Whether it is a cable drum (takes winch commands).
     pub fn is_winch(&self) -> bool {
         self.winch
+    }
+    /// The fault acting on it.
+    pub fn fault(&self) -> ActuatorFault {
+        self.fault
     }
     /// Scale of the first target (1 for a clutch): physical speed or target per unit of value.
     pub fn unit_scale(&self) -> f64 {
@@ -206,11 +226,23 @@ impl Controls {
         }
     }
 
-    /// Back to the values at load; the applied values jump there too.
+    /// Back to the values at load; the applied values jump there too, faults are cleared.
     pub fn reset(&mut self) {
         for a in &mut self.actuators {
             a.value = a.initial;
             a.applied = a.initial;
+            a.fault = ActuatorFault::None;
+        }
+    }
+
+    /// Puts a fault on actuator `i` (`faults.rs`); `false` if there is none.
+    pub fn set_fault(&mut self, i: usize, fault: ActuatorFault) -> bool {
+        match self.actuators.get_mut(i) {
+            Some(a) => {
+                a.fault = fault;
+                true
+            }
+            None => false,
         }
     }
 
@@ -218,25 +250,30 @@ impl Controls {
     /// motors and couplings. No allocation.
     pub fn apply(&mut self, world: &mut World, h: f64) -> Result<(), ControlError> {
         for a in &mut self.actuators {
-            a.applied = match a.rate {
-                Some(r) => a.applied + (a.value - a.applied).clamp(-r * h, r * h),
-                None => a.value,
-            };
+            if a.fault != ActuatorFault::Frozen {
+                a.applied = match a.rate {
+                    Some(r) => a.applied + (a.value - a.applied).clamp(-r * h, r * h),
+                    None => a.value,
+                };
+            }
             let u = a.applied;
+            let max_force = match a.fault {
+                ActuatorFault::Fade(k) => a.max_force * k,
+                _ => a.max_force,
+            };
             for t in &a.targets {
                 let motor = match a.kind {
-                    ActuatorKind::Velocity => Some(JointMotor::velocity(t.scale * u, a.max_force)),
-                    ActuatorKind::Position => {
-                        Some(JointMotor::position(t.scale * u, a.max_speed, a.max_force))
-                    }
-                    ActuatorKind::Brake if u > 0.0 => Some(JointMotor::velocity(0.0, u * a.max_force)),
+                    _ if a.fault == ActuatorFault::Limp => None,
+                    ActuatorKind::Velocity => Some(JointMotor::velocity(t.scale * u, max_force)),
+                    ActuatorKind::Position => Some(JointMotor::position(t.scale * u, a.max_speed, max_force)),
+                    ActuatorKind::Brake if u > 0.0 => Some(JointMotor::velocity(0.0, u * max_force)),
                     ActuatorKind::Brake => None,
                     ActuatorKind::Clutch => continue,
                 };
                 world.set_joint_axis_motor(t.joint, t.axis, motor)?;
             }
             if let (ActuatorKind::Clutch, Some(c)) = (a.kind, a.coupling) {
-                world.set_coupling_max_torque(c, Some(u * a.max_force))?;
+                world.set_coupling_max_torque(c, Some(u * max_force))?;
             }
         }
         Ok(())

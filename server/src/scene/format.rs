@@ -34,6 +34,12 @@ pub(crate) struct SceneFile {
     pub joystick: Option<Spanned<JoystickDef>>,
     #[serde(default)]
     pub script: Vec<Spanned<ScriptDef>>,
+    #[serde(default)]
+    pub sensor: Vec<Spanned<SensorDef>>,
+    #[serde(default)]
+    pub event: Vec<Spanned<EventDef>>,
+    #[serde(default)]
+    pub fault: Vec<Spanned<FaultDef>>,
 }
 
 /// `[scene]`: name, text and world settings.
@@ -360,4 +366,45 @@ pub(crate) struct ScriptDef {
     pub ramp: Option<f64>,
     pub event: Option<String>,
     pub joint: Option<String>,
+}
+
+/// `[[sensor]]`: a signal computed from the solved impulses every step.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct SensorDef {
+    pub name: String,
+    #[serde(rename = "type")]
+    pub kind: String,
+    pub joint: Option<String>,
+    pub cable: Option<String>,
+    pub bodies: Option<Vec<String>>,
+    pub with: Option<Vec<String>>,
+    pub touch: Option<f64>,
+}
+
+/// `[[event]]`: a threshold on a sensor channel.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct EventDef {
+    pub name: String,
+    pub channel: String,
+    pub above: Option<f64>,
+    pub below: Option<f64>,
+    pub hysteresis: Option<f64>,
+}
+
+/// `[[fault]]`: a scripted fault.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct FaultDef {
+    pub name: String,
+    #[serde(rename = "type")]
+    pub kind: String,
+    pub joint: Option<String>,
+    pub actuator: Option<String>,
+    pub sensor: Option<String>,
+    pub t: Option<f64>,
+    pub tension: Option<f64>,
+    pub to: Option<f64>,
+    pub ramp: Option<f64>,
 }

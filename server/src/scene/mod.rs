@@ -8,6 +8,8 @@
 //! | `build.rs` | checks and builds: repeats, references, inertia from shapes, errors with locations |
 //! | `terrain.rs` | terrain shape types (heightfield, stairs, hills, trimesh) and the material table |
 //! | `controls.rs` | actuators, joystick mapping, timeline |
+//! | `signals.rs` | `[[sensor]]`, `[[event]]`, `[[fault]]` → the scene's signals and faults |
+//! | `faults.rs` | faults (rope break, hose burst, brake fade, sticking valve, sensor dropout), scripted and live |
 //! | `builtin.rs` | the scenes shipped in `scenes/`, embedded in the binary |
 //! | `overrides.rs` | `--set KEY=VALUE`: settings overridden on the command line |
 //!
@@ -36,8 +38,10 @@ mod build;
 mod builtin;
 mod checks;
 mod controls;
+mod faults;
 mod format;
 mod overrides;
+mod signals;
 mod terrain;
 
 use std::fmt;
@@ -47,12 +51,15 @@ use thiserror::Error;
 
 pub use builtin::{BUILTIN, BuiltinScene, builtin};
 pub use controls::{
-    Actuator, ActuatorKind, ActuatorTarget, AxisMode, ButtonAction, Controls, InputError, JoyAxis, JoyButton,
-    JoystickError, JoystickMap, Neutral, SceneEvent, Script, ScriptEntry,
+    Actuator, ActuatorFault, ActuatorKind, ActuatorTarget, AxisMode, ButtonAction, Controls, InputError,
+    JoyAxis, JoyButton, JoystickError, JoystickMap, Neutral, SceneEvent, Script, ScriptEntry,
 };
+pub use faults::{Fault, FaultAction, FaultError, FaultRequest, FaultTrigger, Faults, MAX_FAULTS};
 pub use overrides::{OverrideError, SceneOverride};
+pub use signals::DEFAULT_TOUCH;
 
 use crate::dynamics::{ControlError, ModelError, StepError, WatchdogSettings, World};
+use crate::signals::{Event, EventKind, EventName, Signals};
 
 /// A place in a scene file (1-based line and column).
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -172,6 +179,12 @@ pub struct Scene {
     pub joystick: JoystickMap,
     /// Bounds of the instability watchdog (`[scene] max_speed`, `energy_margin`).
     pub watchdog: WatchdogSettings,
+    /// Sensors and threshold events (`[[sensor]]`, `[[event]]`), evaluated after every step.
+    pub signals: Signals,
+    /// Faults, declared (`[[fault]]`) and requested ([`Scene::request_fault`]).
+    pub faults: Faults,
+    /// How many of `faults` the file declared (a reset keeps these).
+    pub declared_faults: usize,
 }
 
 impl Scene {
@@ -183,12 +196,40 @@ impl Scene {
         self.step_manual()
     }
 
-    /// One step without the script (an operator drives the actuators).
+    /// One step without the script (an operator drives the actuators): the faults due, the
+    /// actuators, the world's step, then the signals, tension-triggered faults and thresholds.
     pub fn step_manual(&mut self) -> Result<(), SceneStepError> {
         let h = self.world.settings().timestep;
+        self.signals.begin_events();
+        let t = self.world.time();
+        self.faults.before_step(t, &mut self.world, &mut self.controls, &mut self.signals)?;
         self.controls.apply(&mut self.world, h)?;
         self.world.step()?;
+        self.signals.evaluate(&self.world);
+        let t = self.world.time();
+        self.faults.after_step(t, &mut self.world, &mut self.controls, &mut self.signals)?;
+        self.signals.check_thresholds(t);
         Ok(())
+    }
+
+    /// A live fault request (an instructor station): checked against the scene and queued to fire
+    /// at the next step (or when its tension limit is reached). A refused request is counted as a
+    /// `FaultRejected` event and returned as a typed error.
+    pub fn request_fault(&mut self, req: &FaultRequest) -> Result<(), FaultError> {
+        let result = Faults::resolve(req, &self.world, &self.controls, &self.signals, None)
+            .and_then(|f| self.faults.push(f, &mut self.signals));
+        if result.is_err() {
+            let time = self.world.time();
+            let name = EventName::new(&req.target);
+            self.signals.queue_event(Event {
+                kind: EventKind::FaultRejected,
+                name,
+                time,
+                value: 0.0,
+                level: 0.0,
+            });
+        }
+        result
     }
 }
 

@@ -52,6 +52,15 @@ pub struct Engine {
     pose_buf: Vec<u8>,
     stats: msgs::SolverStats,
     stats_buf: Vec<u8>,
+    /// The scene's channel names as wire names (built at each scene change).
+    channel_names: Vec<msgs::ActuatorName>,
+    signals: msgs::SignalsFrame,
+    signals_buf: Vec<u8>,
+    events: msgs::EventsFrame,
+    /// The last step's events frame; empty when the step had none or was already published.
+    events_buf: Vec<u8>,
+    /// The sequence whose events were encoded last.
+    events_sequence: Option<u64>,
     step_wall_us: f64,
     failure: Option<String>,
     generation: u64,
@@ -110,6 +119,12 @@ impl Engine {
             pose_buf: Vec::new(),
             stats: msgs::SolverStats::default(),
             stats_buf: Vec::new(),
+            channel_names: Vec::new(),
+            signals: msgs::SignalsFrame::default(),
+            signals_buf: Vec::new(),
+            events: msgs::EventsFrame::default(),
+            events_buf: Vec::new(),
+            events_sequence: None,
             step_wall_us: 0.0,
             failure: None,
             generation: 0,
@@ -144,6 +159,8 @@ impl Engine {
         self.watchdog = Watchdog::new(&self.scene.world, self.scene.watchdog);
         self.unstable = false;
         self.degraded = msgs::DegradedSolves::default();
+        self.channel_names = super::wire::channel_names(&self.scene.signals);
+        self.events_sequence = None;
     }
 
     /// Changes whenever the scene (and so its description) is replaced or reset.
@@ -169,6 +186,27 @@ impl Engine {
     /// The last step's encoded stats frame.
     pub fn stats_frame(&self) -> &[u8] {
         &self.stats_buf
+    }
+
+    /// The last step's encoded signals frame.
+    pub fn signals_frame(&self) -> &[u8] {
+        &self.signals_buf
+    }
+
+    /// The last step's encoded events frame, empty when the step had no events or its events were
+    /// already encoded (a paused world's republished frames carry none).
+    pub fn events_frame(&self) -> &[u8] {
+        &self.events_buf
+    }
+
+    /// The frames of the last step, as the transports publish them.
+    pub fn frames(&self) -> super::Frames<'_> {
+        super::Frames {
+            poses: &self.pose_buf,
+            stats: &self.stats_buf,
+            signals: &self.signals_buf,
+            events: &self.events_buf,
+        }
     }
 
     /// Input counters.
@@ -388,6 +426,17 @@ impl Engine {
                 info!("solver variant switched to {}", v.name());
             }
             C::LoadScene { scene } => self.load(scene)?,
+            C::Fault { fault, target, tension, to, ramp } => {
+                let req = scene::FaultRequest {
+                    kind: fault.name().to_string(),
+                    target: target.clone(),
+                    tension: *tension,
+                    to: *to,
+                    ramp: *ramp,
+                };
+                self.scene.request_fault(&req).map_err(|e| (E::FaultRejected, e.to_string()))?;
+                info!("fault {} on `{target}` requested", fault.name());
+            }
         }
         Ok(())
     }
@@ -513,6 +562,29 @@ impl Engine {
         st.totals = msgs::StepTotals::from_islands(&st.islands);
         if let Err(e) = st.encode(&mut self.stats_buf) {
             warn!("stats frame not encodable: {e}");
+        }
+        let sig = &self.scene.signals;
+        super::wire::fill_signals(sig, &self.channel_names, self.sequence, w.time(), &mut self.signals);
+        if let Err(e) = self.signals.encode(&mut self.signals_buf) {
+            warn!("signals frame not encodable: {e}");
+        }
+        self.events_buf.clear();
+        if self.events_sequence != Some(self.sequence) && !sig.events().is_empty() {
+            self.events_sequence = Some(self.sequence);
+            super::wire::fill_events(sig, self.sequence, w.time(), &mut self.events);
+            if let Err(e) = self.events.encode(&mut self.events_buf) {
+                warn!("events frame not encodable: {e}");
+            }
+            for e in &self.events.events {
+                info!(
+                    "event {} {} at {:.3} s: value {} (level {})",
+                    e.kind.name(),
+                    e.name.as_str(),
+                    e.time,
+                    e.value,
+                    e.level
+                );
+            }
         }
     }
 }

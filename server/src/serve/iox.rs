@@ -20,7 +20,7 @@ use pivotsim_link::iox as link;
 use pivotsim_msgs as msgs;
 use tracing::{info, warn};
 
-use super::{ErrorThrottle, Inbound, InboxSender, ServeError, Transport};
+use super::{ErrorThrottle, Frames, Inbound, InboxSender, ServeError, Transport};
 
 /// Bytes a published frame may take before the publisher reallocates (a pose frame of 500 bodies).
 pub const INITIAL_FRAME_BYTES: usize = 64 * 1024;
@@ -55,9 +55,13 @@ type Service = link::ByteService;
 pub struct IoxTransport {
     poses: Publisher<ipc::Service, [u8], ()>,
     stats: Publisher<ipc::Service, [u8], ()>,
+    signals: Publisher<ipc::Service, [u8], ()>,
+    events: Publisher<ipc::Service, [u8], ()>,
     inputs: Subscriber<ipc::Service, [u8], ()>,
     poses_service: Service,
     _stats_service: Service,
+    _signals_service: Service,
+    _events_service: Service,
     _cmd_service: Service,
     throttle: ErrorThrottle,
     prefix: String,
@@ -84,6 +88,8 @@ impl IoxTransport {
         let open = |t: msgs::Topic| link::open_service(&node, &link::service_name(world, t)?);
         let poses_service = open(msgs::Topic::Poses).map_err(err)?;
         let stats_service = open(msgs::Topic::Stats).map_err(err)?;
+        let signals_service = open(msgs::Topic::Signals).map_err(err)?;
+        let events_service = open(msgs::Topic::Events).map_err(err)?;
         let cmd_service = open(msgs::Topic::Joystick).map_err(err)?;
         let publisher = |s: &Service| {
             s.publisher_builder()
@@ -109,13 +115,19 @@ impl IoxTransport {
             });
         }
         let stats = publisher(&stats_service)?;
+        let signals = publisher(&signals_service)?;
+        let events = publisher(&events_service)?;
         let inputs = cmd_service.subscriber_builder().create().map_err(|e| err(format!("{e:?}")))?;
         Ok(IoxTransport {
             poses,
             stats,
+            signals,
+            events,
             inputs,
             poses_service,
             _stats_service: stats_service,
+            _signals_service: signals_service,
+            _events_service: events_service,
             _cmd_service: cmd_service,
             throttle: ErrorThrottle::default(),
             prefix: format!("{}/{}", msgs::KEY_PREFIX, world.as_str()),
@@ -131,12 +143,20 @@ impl IoxTransport {
 }
 
 impl Transport for IoxTransport {
-    fn publish(&mut self, poses: &[u8], stats: &[u8]) {
-        if let Err(e) = Self::send(&self.poses, poses) {
+    fn publish(&mut self, frames: Frames<'_>) {
+        if let Err(e) = Self::send(&self.poses, frames.poses) {
             self.throttle.fail("iceoryx2 poses", &e);
         }
-        if let Err(e) = Self::send(&self.stats, stats) {
+        if let Err(e) = Self::send(&self.stats, frames.stats) {
             self.throttle.fail("iceoryx2 stats", &e);
+        }
+        if let Err(e) = Self::send(&self.signals, frames.signals) {
+            self.throttle.fail("iceoryx2 signals", &e);
+        }
+        if !frames.events.is_empty()
+            && let Err(e) = Self::send(&self.events, frames.events)
+        {
+            self.throttle.fail("iceoryx2 events", &e);
         }
     }
 
@@ -160,6 +180,9 @@ impl Transport for IoxTransport {
     }
 
     fn describe(&self) -> String {
-        format!("iceoryx2 (same host, shared memory): services {}/{{poses, stats, cmd}}", self.prefix)
+        format!(
+            "iceoryx2 (same host, shared memory): services {}/{{poses, stats, signals, events, cmd}}",
+            self.prefix
+        )
     }
 }

@@ -222,10 +222,23 @@ pub fn inbox() -> (InboxSender, pivotsim_link::Inbox<Inbound>) {
     (InboxSender(tx), rx)
 }
 
+/// One step's encoded frames, as the transports publish them.
+#[derive(Debug, Clone, Copy)]
+pub struct Frames<'a> {
+    /// Pose frame (`poses`).
+    pub poses: &'a [u8],
+    /// Solver stats (`stats`).
+    pub stats: &'a [u8],
+    /// Signals (`signals`).
+    pub signals: &'a [u8],
+    /// Events (`events`); empty when the step had none: nothing is published.
+    pub events: &'a [u8],
+}
+
 /// A transport as the loop sees it.
 pub trait Transport {
     /// Publishes one step's frames; never blocks on subscribers.
-    fn publish(&mut self, poses: &[u8], stats: &[u8]);
+    fn publish(&mut self, frames: Frames<'_>);
     /// Hands over inputs received since the last call (transports that poll).
     fn poll(&mut self, _inbox: &InboxSender) {}
     /// The scene description changed (load, reset).
@@ -361,7 +374,7 @@ fn serve_loop(
     let mut status = StatusWindow::new(engine);
     for t in transports.iter_mut() {
         t.set_description(engine.description());
-        t.publish(engine.pose_frame(), engine.stats_frame());
+        t.publish(engine.frames());
     }
     while !shutdown.load(Ordering::Relaxed) && config.max_steps.is_none_or(|m| steps < m) {
         for t in transports.iter_mut() {
@@ -386,7 +399,7 @@ fn serve_loop(
                 engine.encode_frames(pivotsim_link::wall_ns());
             }
             for t in transports.iter_mut() {
-                t.publish(engine.pose_frame(), engine.stats_frame());
+                t.publish(engine.frames());
             }
         }
         if stepped {

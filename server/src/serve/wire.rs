@@ -5,6 +5,7 @@
 use pivotsim_msgs as msgs;
 
 use crate::dynamics::IslandStats;
+use crate::signals::{ContactStateKind, EventKind, Signals};
 use crate::solver::{SolveStatus, Variant};
 
 impl From<Variant> for msgs::SolverVariant {
@@ -89,6 +90,98 @@ impl From<&IslandStats> for msgs::IslandStats {
             // largest one.
             residual_rel: if residual_rel.is_finite() { residual_rel.max(0.0) } else { f64::MAX },
         }
+    }
+}
+
+impl From<ContactStateKind> for msgs::ContactCode {
+    fn from(s: ContactStateKind) -> Self {
+        match s {
+            ContactStateKind::Open => msgs::ContactCode::Open,
+            ContactStateKind::Stick => msgs::ContactCode::Stick,
+            ContactStateKind::Slip => msgs::ContactCode::Slip,
+        }
+    }
+}
+
+impl From<EventKind> for msgs::EventCode {
+    fn from(k: EventKind) -> Self {
+        match k {
+            EventKind::Raised => msgs::EventCode::Raised,
+            EventKind::Cleared => msgs::EventCode::Cleared,
+            EventKind::Fault => msgs::EventCode::Fault,
+            EventKind::FaultRejected => msgs::EventCode::FaultRejected,
+        }
+    }
+}
+
+/// The wire names of a scene's channels (checked against the name rules when the scene was built;
+/// a name that does not fit is replaced by `?`-free `invalid/{index}`).
+pub(crate) fn channel_names(signals: &Signals) -> Vec<msgs::ActuatorName> {
+    signals
+        .channel_names()
+        .iter()
+        .enumerate()
+        .map(|(i, n)| {
+            msgs::ActuatorName::new(n)
+                .or_else(|_| msgs::ActuatorName::new(&format!("invalid/{i}")))
+                .expect("a short ASCII name")
+        })
+        .collect()
+}
+
+/// Fills `out` with the signals of the last step (reusing its vectors: no allocation once grown).
+/// A non-finite reading (none is expected) is sent as a dropout.
+pub(crate) fn fill_signals(
+    signals: &Signals,
+    names: &[msgs::ActuatorName],
+    sequence: u64,
+    sim_time: f64,
+    out: &mut msgs::SignalsFrame,
+) {
+    out.sequence = sequence;
+    out.sim_time = sim_time;
+    out.events_total = signals.events_total();
+    out.faults_applied = signals.faults_applied().min(u64::from(u32::MAX)) as u32;
+    out.faults_rejected = signals.faults_rejected().min(u64::from(u32::MAX)) as u32;
+    out.channels.clear();
+    for ((name, &value), &valid) in names.iter().zip(signals.values()).zip(signals.valid()) {
+        let ok = valid && value.is_finite();
+        out.channels.push(msgs::SignalChannel {
+            name: *name,
+            dropout: !ok,
+            value: if ok { value } else { 0.0 },
+        });
+    }
+    out.contacts.clear();
+    for c in signals.contacts().iter().take(msgs::MAX_CONTACTS) {
+        let finite = |x: f64| if x.is_finite() { x } else { 0.0 };
+        out.contacts.push(msgs::ContactRecord {
+            body_a: c.bodies[0].0,
+            body_b: c.bodies[1].0,
+            state: c.state.into(),
+            point: [finite(c.point.x), finite(c.point.y), finite(c.point.z)],
+            normal_force: finite(c.normal_force).max(0.0),
+            friction_force: finite(c.friction_force).max(0.0),
+        });
+    }
+}
+
+/// Fills `out` with the events of the last step.
+pub(crate) fn fill_events(signals: &Signals, sequence: u64, sim_time: f64, out: &mut msgs::EventsFrame) {
+    out.sequence = sequence;
+    out.sim_time = sim_time;
+    out.events_total = signals.events_total();
+    out.events.clear();
+    for e in signals.events().iter().take(msgs::MAX_EVENTS) {
+        let finite = |x: f64| if x.is_finite() { x } else { 0.0 };
+        let Ok(name) = msgs::ActuatorName::new(e.name.as_str()) else { continue };
+        out.events.push(msgs::EventRecord {
+            name,
+            kind: e.kind.into(),
+            time: finite(e.time).max(0.0),
+            value: finite(e.value),
+            level: finite(e.level),
+        });
     }
 }
 

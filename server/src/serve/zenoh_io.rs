@@ -14,7 +14,7 @@ use zenoh::pubsub::{Publisher, Subscriber};
 use zenoh::qos::CongestionControl;
 use zenoh::query::Queryable;
 
-use super::{ErrorThrottle, Inbound, InboxSender, ServeError, Transport, ZenohOptions};
+use super::{ErrorThrottle, Frames, Inbound, InboxSender, ServeError, Transport, ZenohOptions};
 
 fn err(e: impl std::fmt::Display) -> ServeError {
     ServeError::Transport { transport: "zenoh", message: e.to_string() }
@@ -65,6 +65,8 @@ pub struct ZenohTransport {
     session: zenoh::Session,
     poses: Publisher<'static>,
     stats: Publisher<'static>,
+    signals: Publisher<'static>,
+    events: Publisher<'static>,
     _inputs: Subscriber<()>,
     _scene: Queryable<()>,
     _control: Queryable<()>,
@@ -102,6 +104,8 @@ impl ZenohTransport {
         };
         let poses = publisher(msgs::Topic::Poses)?;
         let stats = publisher(msgs::Topic::Stats)?;
+        let signals = publisher(msgs::Topic::Signals)?;
+        let events = publisher(msgs::Topic::Events)?;
         let tx = inbox.clone();
         let inputs = session
             .declare_subscriber(msgs::inputs_wildcard(world))
@@ -151,6 +155,8 @@ impl ZenohTransport {
             session,
             poses,
             stats,
+            signals,
+            events,
             _inputs: inputs,
             _scene: scene,
             _control: control,
@@ -165,12 +171,20 @@ impl ZenohTransport {
 }
 
 impl Transport for ZenohTransport {
-    fn publish(&mut self, poses: &[u8], stats: &[u8]) {
-        if let Err(e) = self.poses.put(poses.to_vec()).wait() {
+    fn publish(&mut self, frames: Frames<'_>) {
+        if let Err(e) = self.poses.put(frames.poses.to_vec()).wait() {
             self.throttle.fail("zenoh poses", &e);
         }
-        if let Err(e) = self.stats.put(stats.to_vec()).wait() {
+        if let Err(e) = self.stats.put(frames.stats.to_vec()).wait() {
             self.throttle.fail("zenoh stats", &e);
+        }
+        if let Err(e) = self.signals.put(frames.signals.to_vec()).wait() {
+            self.throttle.fail("zenoh signals", &e);
+        }
+        if !frames.events.is_empty()
+            && let Err(e) = self.events.put(frames.events.to_vec()).wait()
+        {
+            self.throttle.fail("zenoh events", &e);
         }
     }
 
@@ -189,7 +203,10 @@ impl Transport for ZenohTransport {
         if !self.connect.is_empty() {
             d.push_str(&format!(" connecting to {}", self.connect.join(", ")));
         }
-        d.push_str(&format!(": keys {}/{{poses, stats, cmd/*, scene, control}}", self.prefix));
+        d.push_str(&format!(
+            ": keys {}/{{poses, stats, signals, events, cmd/*, scene, control}}",
+            self.prefix
+        ));
         d
     }
 

@@ -135,6 +135,7 @@ use super::body::{BodyKind, RigidBody};
 use super::ids::{BodyId, ColliderId};
 use super::joint::Joint;
 use super::rows::ConstraintRow;
+use crate::solver::IndexState;
 
 /// Default compliance of contact rows (m/N), as joints'.
 pub const DEFAULT_CONTACT_COMPLIANCE: f64 = 1e-10;
@@ -614,4 +615,11 @@ pub struct ContactReport {
     pub friction_impulse: [f64; 2],
     /// The tangent basis used.
     pub tangents: [Vector3<f64>; 2],
+    /// The bodies of collider A and of collider B.
+    pub bodies: [BodyId; 2],
+    /// Friction coefficient of the pair (the friction rows' bound is `μ λ_n`).
+    pub mu: f64,
+    /// Final index states of the normal row and the two friction rows in the solver's last index
+    /// set (`Free` for a point whose island was not solved).
+    pub states: [IndexState; 3],
 }

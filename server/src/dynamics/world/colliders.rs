@@ -6,8 +6,9 @@ use super::World;
 use crate::dynamics::contact::{
     Collider, ColliderBuilder, CollisionGroups, ContactError, ContactReport, ContactSettings,
 };
-use crate::dynamics::ids::ColliderId;
+use crate::dynamics::ids::{BodyId, ColliderId};
 use crate::dynamics::rows::RowKey;
+use crate::solver::IndexState;
 
 impl World {
     /// Adds a collider (validated; degenerate shapes are refused with a typed error).
@@ -149,10 +150,11 @@ impl World {
     /// step or for a point whose island was not solved).
     pub fn contacts(&self) -> impl Iterator<Item = ContactReport> + '_ {
         self.contacts.phase.points.iter().map(move |p| {
-            let lambda = |row: u8| {
+            let record = |row: u8| {
                 let key = RowKey::Contact { colliders: [p.ca, p.cb], features: p.features, row };
-                self.last_step_row(key).map_or(0.0, |w| w.lambda)
+                self.last_step_row(key).map_or((0.0, IndexState::Free), |w| (w.lambda, w.state))
             };
+            let rows = [record(0), record(1), record(2)];
             ContactReport {
                 collider_a: ColliderId(p.ca),
                 collider_b: ColliderId(p.cb),
@@ -160,9 +162,12 @@ impl World {
                 point_b: p.pb,
                 normal: p.n,
                 gap: p.dist,
-                normal_impulse: lambda(0),
-                friction_impulse: [lambda(1), lambda(2)],
+                normal_impulse: rows[0].0,
+                friction_impulse: [rows[1].0, rows[2].0],
                 tangents: p.t,
+                bodies: [BodyId(p.a as u32), BodyId(p.b as u32)],
+                mu: p.mu,
+                states: [rows[0].1, rows[1].1, rows[2].1],
             }
         })
     }

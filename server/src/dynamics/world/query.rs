@@ -18,8 +18,9 @@ use crate::dynamics::island::Islands;
 use crate::dynamics::joint::{Joint, JointRow};
 use crate::dynamics::joint_rows::JointGeometry;
 use crate::dynamics::motor::FreeAxis;
-use crate::dynamics::rows::{RowKey, Side, WarmRow};
+use crate::dynamics::rows::{ConstraintRow, RowKey, Side, WarmRow};
 use crate::dynamics::stats::IslandStats;
+use crate::solver::IndexState;
 
 /// A joint's frames in world coordinates (see `joint.rs`): anchors `p_a`, `p_b` and x axes
 /// `e₁` (of A's frame), `f₁` (of B's frame). A joint without violation has `p_a = p_b` (along the
@@ -133,6 +134,20 @@ impl World {
             }
         }
         Some(r)
+    }
+
+    /// The joint rows of the last step with their impulses `λ` (N s or N m s) and final index
+    /// states, in row order (a row whose island was not solved: `λ = 0`, `Free`). Allocation-free:
+    /// the signals (`crate::signals`) sum them into joint wrenches every step.
+    pub fn last_joint_rows(&self) -> impl Iterator<Item = (JointId, &ConstraintRow, f64, IndexState)> + '_ {
+        self.ws.rows.iter().filter_map(move |row| match row.key {
+            RowKey::Joint { joint, .. } => {
+                let (lambda, state) =
+                    self.last_step_row(row.key).map_or((0.0, IndexState::Free), |w| (w.lambda, w.state));
+                Some((joint, row, lambda, state))
+            }
+            _ => None,
+        })
     }
 
     /// Islands of the last step.

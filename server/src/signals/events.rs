@@ -1,0 +1,168 @@
+//! Threshold events on channels (a tipping margin below 10 %, a rope over its rating, a load
+//! slipping on the forks) and the event records faults add, with the simulation time.
+//!
+//! A threshold `above L` (`below L`) is *raised* at the first step whose value is `> L` (`< L`) and
+//! *cleared* at the first later step whose value is back `≤ L − hyst` (`≥ L + hyst`); a dropped-out
+//! channel neither raises nor clears. Each raise and clear is one [`Event`] of that step.
+
+use super::eval::Signals;
+
+/// Which side of the level raises a threshold.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ThresholdDir {
+    /// Raised above the level.
+    Above,
+    /// Raised below the level.
+    Below,
+}
+
+/// A declared threshold on a channel.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Threshold {
+    /// Event name (wire name rules: 1 to 32 bytes of `[A-Za-z0-9_.-/]`).
+    pub name: EventName,
+    /// The channel's index in [`Signals::channel_names`].
+    pub channel: usize,
+    /// Side.
+    pub dir: ThresholdDir,
+    /// Level, in the channel's unit.
+    pub level: f64,
+    /// Hysteresis of the clear (≥ 0).
+    pub hysteresis: f64,
+    /// Raised now.
+    pub active: bool,
+}
+
+/// What happened.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum EventKind {
+    /// A threshold was crossed.
+    Raised,
+    /// A threshold's channel came back.
+    Cleared,
+    /// A fault took effect.
+    Fault,
+    /// A fault request was refused (unknown target, bad value).
+    FaultRejected,
+}
+
+/// An event name stored inline (at most 32 bytes: no allocation per event).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct EventName {
+    bytes: [u8; 32],
+    len: u8,
+}
+
+impl EventName {
+    /// The name, cut to 32 bytes at a character boundary.
+    pub fn new(s: &str) -> Self {
+        let mut end = s.len().min(32);
+        while !s.is_char_boundary(end) {
+            end -= 1;
+        }
+        let mut bytes = [0; 32];
+        bytes[..end].copy_from_slice(&s.as_bytes()[..end]);
+        EventName { bytes, len: end as u8 }
+    }
+    /// As text.
+    pub fn as_str(&self) -> &str {
+        std::str::from_utf8(&self.bytes[..self.len as usize]).unwrap_or("")
+    }
+}
+
+/// One event of a step.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Event {
+    /// What.
+    pub kind: EventKind,
+    /// The threshold's or fault's name.
+    pub name: EventName,
+    /// Simulation time at the end of the step (s).
+    pub time: f64,
+    /// The channel's value (a tension that broke a rope; 0 when there is none).
+    pub value: f64,
+    /// The threshold's level (a fault's limit; 0 when there is none).
+    pub level: f64,
+}
+
+impl Signals {
+    /// Declares a threshold (the scene builder; sizes the event buffer).
+    pub fn add_threshold(&mut self, t: Threshold) {
+        self.thresholds.push(t);
+        self.fired.reserve(2);
+    }
+
+    /// Room for events of `n` more faults per step (the scene builder).
+    pub fn reserve_events(&mut self, n: usize) {
+        self.fired.reserve(n);
+    }
+
+    /// Clears the last step's events (called before a step's faults and thresholds); the events
+    /// queued since ([`Signals::queue_event`]) become this step's first.
+    pub fn begin_events(&mut self) {
+        self.fired.clear();
+        self.fired.append(&mut self.queued);
+    }
+
+    /// Records an event between steps (a refused request): counted now, listed with the next
+    /// step's events (the first [`MAX_QUEUED_EVENTS`](super::MAX_QUEUED_EVENTS) of them).
+    pub fn queue_event(&mut self, e: Event) {
+        self.count(e.kind);
+        if self.queued.len() < self.queued.capacity() {
+            self.queued.push(e);
+        }
+    }
+
+    fn count(&mut self, kind: EventKind) {
+        self.events_total += 1;
+        match kind {
+            EventKind::Fault => self.faults_applied += 1,
+            EventKind::FaultRejected => self.faults_rejected += 1,
+            EventKind::Raised | EventKind::Cleared => {}
+        }
+    }
+
+    /// Records an event of this step.
+    pub fn push_event(&mut self, e: Event) {
+        self.fired.push(e);
+        self.count(e.kind);
+    }
+
+    /// Checks every threshold on the values of this step at time `time`.
+    pub fn check_thresholds(&mut self, time: f64) {
+        for i in 0..self.thresholds.len() {
+            let t = &self.thresholds[i];
+            if !self.valid[t.channel] {
+                continue;
+            }
+            let v = self.values[t.channel];
+            let (raise, clear) = match t.dir {
+                ThresholdDir::Above => (v > t.level, v <= t.level - t.hysteresis),
+                ThresholdDir::Below => (v < t.level, v >= t.level + t.hysteresis),
+            };
+            let kind = if !t.active && raise {
+                EventKind::Raised
+            } else if t.active && clear {
+                EventKind::Cleared
+            } else {
+                continue;
+            };
+            let (name, level) = (t.name, t.level);
+            self.thresholds[i].active = kind == EventKind::Raised;
+            self.push_event(Event { kind, name, time, value: v, level });
+        }
+    }
+
+    /// Back to the state at load: thresholds lowered, counters and dropouts cleared.
+    pub fn reset(&mut self) {
+        for t in &mut self.thresholds {
+            t.active = false;
+        }
+        self.fired.clear();
+        self.queued.clear();
+        self.dropout.fill(false);
+        self.events_total = 0;
+        self.faults_applied = 0;
+        self.faults_rejected = 0;
+    }
+}

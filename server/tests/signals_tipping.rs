@@ -1,0 +1,113 @@
+//! The load-moment indicator against statics (issue 17): a 6,000 kg carrier (4 × 2 m footprint)
+//! slews a 6 m, 1,000 kg boom with a 1,000 kg load at its tip. The machine's centre of mass turns
+//! on a circle of radius `r = (1000 · 3 + 1000 · 6) / 8000 = 1.125 m` about the slew axis and leaves
+//! the footprint over its long side (`|y| = 1 m`) at the boom angle `θ* = asin(1 / r) = 62.73°`:
+//! the tipping margin must cross zero there (within 1°), the 10 % warning must come before, and the
+//! machine must then actually tip over that side.
+
+use pivotsim_server::scene;
+use pivotsim_server::signals::EventKind;
+
+const SCENE: &str = r#"
+[scene]
+name = "slewing-crane"
+[[body]]
+name = "ground"
+kind = "static"
+[[body.shape]]
+type = "plane"
+[[body]]
+name = "carrier"
+mass = 6000.0
+position = [0, 0, 0.25]
+[[body.shape]]
+type = "box"
+size = [4.0, 2.0, 0.5]
+[[body]]
+name = "boom"
+mass = 1000.0
+position = [1.9283628290596178, 2.2981333293569337, 0.75]
+rotation = [0, 0, 50]
+angular_velocity = [0, 0, 0.1]
+velocity = [-0.22981333293569337, 0.19283628290596178, 0]
+[[body.shape]]
+type = "box"
+size = [6.0, 0.2, 0.2]
+[[body]]
+name = "load"
+mass = 1000.0
+position = [3.8567256581192355, 4.596266658713867, 0.75]
+inertia = [40.0, 40.0, 40.0]
+velocity = [-0.4596266658713867, 0.38567256581192355, 0]
+angular_velocity = [0, 0, 0.1]
+[[body.shape]]
+type = "ball"
+radius = 0.25
+[[joint]]
+name = "slew"
+type = "hinge"
+a = "boom"
+b = "carrier"
+anchor = [0, 0, 0.75]
+axis = [0, 0, 1]
+motor = { speed = 0.1, max_force = 1e8 }
+[[joint]]
+name = "tip"
+type = "fixed"
+a = "load"
+b = "boom"
+anchor = [3.8567256581192355, 4.596266658713867, 0.75]
+[[sensor]]
+name = "lmi"
+type = "tipping"
+bodies = ["carrier", "boom", "load"]
+[[event]]
+name = "lmi-warning"
+channel = "lmi/percent"
+below = 10.0
+"#;
+
+#[test]
+fn tipping_margin_crosses_zero_at_the_static_boom_angle_and_the_machine_tips() {
+    let mut s = scene::load_str("slew.toml", SCENE).unwrap();
+    let (carrier, load) = (s.world.body_id("carrier").unwrap(), s.world.body_id("load").unwrap());
+    let theta_star = (1.0f64 / 1.125).asin().to_degrees();
+    let boom_angle = |s: &scene::Scene| {
+        let c = s.world.body(carrier).unwrap().position();
+        let l = s.world.body(load).unwrap().position();
+        (l.y - c.y).atan2(l.x - c.x).to_degrees()
+    };
+    let mut warned_at = None;
+    let mut crossed_at = None;
+    let mut last = f64::INFINITY;
+    let mut end = 0;
+    for step in 0..600 {
+        s.step().unwrap();
+        end = step;
+        let d = s.signals.value("lmi/distance").unwrap();
+        if s.signals.events().iter().any(|e| e.kind == EventKind::Raised && e.name.as_str() == "lmi-warning")
+        {
+            warned_at.get_or_insert(boom_angle(&s));
+        }
+        if crossed_at.is_none() && d < 0.0 && last >= 0.0 {
+            crossed_at = Some((step, boom_angle(&s)));
+        }
+        last = d;
+        let up = s.world.body(carrier).unwrap().pose().rotation * nalgebra::Vector3::z();
+        if up.z < 4f64.to_radians().cos() {
+            break;
+        }
+    }
+    let (step, angle) = crossed_at.expect("the margin crossed zero");
+    eprintln!(
+        "crossed at step {step}, boom angle {angle:.3}° (statics {theta_star:.3}°); warning at {warned_at:?}"
+    );
+    assert!((angle - theta_star).abs() < 1.0, "crossed at {angle}°, statics {theta_star}°");
+    assert!(warned_at.expect("a 10 % warning") < angle, "the warning comes first");
+    let up = s.world.body(carrier).unwrap().pose().rotation * nalgebra::Vector3::z();
+    let tilt = up.z.acos().to_degrees();
+    // The load at 6 m with 0.5 m of clearance meets the ground at a tilt of about 4.8°.
+    assert!(tilt > 4.0, "the machine tipped: carrier tilted {tilt:.1}°");
+    eprintln!("tipped: carrier tilted {tilt:.2}° at step {end}");
+    assert!(up.y > 0.0, "over the side the load is on");
+}
