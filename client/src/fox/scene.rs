@@ -283,7 +283,7 @@ pub fn scene_update(scene: &msgs::SceneDescription, stamp: Timestamp) -> SceneSh
     SceneShapes { update: SceneUpdate { deletions: vec![clear], entities }, skipped }
 }
 
-/// Entity id of the contact-force arrows on [`topics::CONTACTS`](super::topics::CONTACTS).
+/// Entity id of the contact-force arrows (the `/pivotsim/contact_forces` scene update).
 pub const CONTACTS_ENTITY: &str = "contacts";
 
 /// The quaternion `[x, y, z, w]` that turns +x onto the unit vector `d` (Foxglove's arrows point
