@@ -15,7 +15,8 @@
 //! 32 s.
 //!
 //! The signals frames become `/pivotsim/signals` (the sensor channels, plottable) and
-//! `/pivotsim/contacts` (the contact states), the events frames `/pivotsim/events`
+//! `/pivotsim/contacts` (the contact states) and `/pivotsim/contact_forces` (the contact forces as
+//! arrows, `foxglove.SceneUpdate`), the events frames `/pivotsim/events`
 //! ([`crate::fox::signals`]).
 //!
 //! Message timestamps: the server's wall time (`wall_time_ns`) for transforms and poses, the
@@ -98,6 +99,7 @@ struct Channels {
     stats: Arc<RawChannel>,
     signals: Arc<RawChannel>,
     contacts: Arc<RawChannel>,
+    contact_forces: Arc<RawChannel>,
     events: Arc<RawChannel>,
 }
 
@@ -120,6 +122,7 @@ impl Channels {
             stats: channel(ctx, topics::stats())?,
             signals: channel(ctx, topics::signals())?,
             contacts: channel(ctx, topics::contacts())?,
+            contact_forces: channel(ctx, topics::contact_forces())?,
             events: channel(ctx, topics::events())?,
         })
     }
@@ -244,6 +247,8 @@ impl View<'_> {
                 self.ch.signals.log_with_meta(&json, meta);
                 let json = serde_json::to_vec(&fox::signals::contacts_json(&s, self.scene.as_ref()))?;
                 self.ch.contacts.log_with_meta(&json, meta);
+                let arrows = fox::signals::contact_forces(&s, frames::timestamp(r.recv_ns));
+                self.ch.contact_forces.log_with_meta(&topics::encode(&arrows), meta);
                 self.n.signals += 1;
                 Ok(true)
             }

@@ -13,6 +13,7 @@
 //! | `/pivotsim/description` | `pivotsim.SceneDescription` (json) | the scene description once at the start (when the server answers) |
 //! | `/pivotsim/signals` | `pivotsim.Signals` (json) | every signals frame: `values.<sensor>.<channel>` (null on a dropout), counters |
 //! | `/pivotsim/contacts` | `pivotsim.Contacts` (json) | every signals frame: per contact the bodies, state, normal and friction force |
+//! | `/pivotsim/contact_forces` | `foxglove.SceneUpdate` (protobuf) | every signals frame: the contact forces as arrows (the largest 0.5 m long) |
 //! | `/pivotsim/events` | `pivotsim.Events` (json) | every events frame: name, kind, time, value, level per event |
 //! | `/pivotsim/cmd/joystick` … `cmd/actuator` | `pivotsim.Joystick` … (json) | inputs, as seen (channel added at the first one) |
 //!
@@ -72,6 +73,7 @@ struct Channels {
     tf: Option<u16>,
     signals: u16,
     contacts: u16,
+    contact_forces: u16,
     events: u16,
     inputs: Vec<(Topic, u16)>,
     input_seq: u32,
@@ -132,6 +134,7 @@ fn open_file(
         tf: None,
         signals: add_channel(&mut w, &topics::signals())?,
         contacts: add_channel(&mut w, &topics::contacts())?,
+        contact_forces: add_channel(&mut w, &topics::contact_forces())?,
         events: add_channel(&mut w, &topics::events())?,
         inputs: Vec::new(),
         input_seq: 0,
@@ -200,6 +203,8 @@ impl Recorder<'_> {
         write_json(&mut self.w, self.ch.signals, seq, r.recv_ns, r.recv_ns, &json)?;
         let json = fox::signals::contacts_json(&s, self.scene);
         write_json(&mut self.w, self.ch.contacts, seq, r.recv_ns, r.recv_ns, &json)?;
+        let arrows = topics::encode(&fox::signals::contact_forces(&s, frames::timestamp(r.recv_ns)));
+        write(&mut self.w, self.ch.contact_forces, seq, r.recv_ns, r.recv_ns, &arrows)?;
         self.n.signals += 1;
         Ok(true)
     }

@@ -280,10 +280,16 @@ fn check_signals(path: &std::path::Path, stderr: &str) {
         let r = m.get(t).unwrap_or_else(|| panic!("no channel {t}: {:?}", m.keys()));
         assert_eq!((r.schema.as_str(), r.schema_encoding.as_str()), (schema, "jsonschema"), "{t}");
     }
+    let arrows = &m["/pivotsim/contact_forces"];
+    assert_eq!(
+        (arrows.schema.as_str(), arrows.schema_encoding.as_str()),
+        ("foxglove.SceneUpdate", "protobuf")
+    );
     let (signals, events) = (printed_count(stderr, "signals"), printed_count(stderr, "events"));
     assert!(signals >= 10, "{signals} signals frames");
     assert_eq!(m["/pivotsim/signals"].messages.len(), signals);
     assert_eq!(m["/pivotsim/contacts"].messages.len(), signals);
+    assert_eq!(arrows.messages.len(), signals);
     assert_eq!(m["/pivotsim/events"].messages.len(), events);
     let sig = m["/pivotsim/signals"].json();
     assert!(sig.windows(2).all(|w| w[1]["sequence"].as_u64() > w[0]["sequence"].as_u64()));

@@ -12,7 +12,12 @@
 use pivotsim_msgs as msgs;
 use serde_json::{Map, Value, json};
 
+use foxglove::schemas::{SceneUpdate, Timestamp};
+
 use crate::util::body_name;
+
+/// Length of the largest contact-force arrow of a frame (m): the arrows of a frame share one scale.
+pub const LONGEST_ARROW: f64 = 0.5;
 
 /// `{sensor}/{channel}` split at the first `/` (a name without one: `(None, name)`).
 fn split(name: &str) -> (Option<&str>, &str) {
@@ -138,6 +143,8 @@ pub fn contacts_json(s: &msgs::SignalsFrame, scene: Option<&msgs::SceneDescripti
                 "a": c.body_a, "b": c.body_b, "state": c.state.name(),
                 "point": {"x": c.point[0], "y": c.point[1], "z": c.point[2]},
                 "normal_force": c.normal_force, "friction_force": c.friction_force,
+                "normal": {"x": c.normal[0], "y": c.normal[1], "z": c.normal[2]},
+                "friction": {"x": c.friction[0], "y": c.friction[1], "z": c.friction[2]},
             })
         })
         .collect();
@@ -149,6 +156,23 @@ pub fn contacts_json(s: &msgs::SignalsFrame, scene: Option<&msgs::SceneDescripti
         "slip": count[msgs::ContactCode::Slip as usize],
         "contacts": contacts,
     })
+}
+
+/// The contact forces on body B of each contact (`normal_force · normal + friction`, N) as arrows
+/// at the contact points ([`super::scene::force_arrows`]), scaled so that the largest is
+/// [`LONGEST_ARROW`] long; open contacts carry no force and draw nothing.
+pub fn contact_forces(s: &msgs::SignalsFrame, stamp: Timestamp) -> SceneUpdate {
+    let force = |c: &msgs::ContactRecord| -> [f64; 3] {
+        std::array::from_fn(|i| c.normal_force * c.normal[i] + c.friction[i])
+    };
+    let largest = s
+        .contacts
+        .iter()
+        .map(|c| force(c).iter().map(|x| x * x).sum::<f64>().sqrt())
+        .filter(|n| n.is_finite())
+        .fold(0.0, f64::max);
+    let scale = if largest > 1e-9 { LONGEST_ARROW / largest } else { 0.0 };
+    super::scene::force_arrows(s.contacts.iter().map(|c| (c.point, force(c))), scale, stamp)
 }
 
 /// JSON schema of [`contacts_json`].
@@ -166,6 +190,8 @@ pub fn contacts_schema() -> Value {
                 "state": {"type": "string", "enum": ["open", "stick", "slip"]},
                 "point": {"type": "object", "properties": {"x": num, "y": num, "z": num}},
                 "normal_force": num, "friction_force": num,
+                "normal": {"type": "object", "properties": {"x": num, "y": num, "z": num}},
+                "friction": {"type": "object", "properties": {"x": num, "y": num, "z": num}},
             }}},
         }
     })
@@ -193,9 +219,11 @@ mod tests {
                 body_a: 3,
                 body_b: 0,
                 state: msgs::ContactCode::Slip,
+                point: [1.0, 2.0, 0.0],
                 normal_force: 10.0,
                 friction_force: 4.0,
-                ..Default::default()
+                normal: [0.0, 0.0, 1.0],
+                friction: [-4.0, 0.0, 0.0],
             }],
             ..Default::default()
         };
@@ -209,6 +237,27 @@ mod tests {
         assert_eq!((c["slip"].as_u64(), c["stick"].as_u64()), (Some(1), Some(0)));
         assert_eq!(c["contacts"][0]["body_a"], "body3");
         assert_eq!(c["contacts"][0]["state"], "slip");
+        assert_eq!(c["contacts"][0]["friction"]["x"], -4.0);
+        // One arrow, at the point, along the total force (-4, 0, 10), the longest length.
+        let u = contact_forces(&s, Timestamp::new(1, 0));
+        let arrows = &u.entities[0].arrows;
+        assert_eq!(arrows.len(), 1);
+        let a = &arrows[0];
+        assert!((a.shaft_length + a.head_length - LONGEST_ARROW).abs() < 1e-12);
+        let p = a.pose.as_ref().unwrap().position.as_ref().unwrap();
+        assert_eq!((p.x, p.y, p.z), (1.0, 2.0, 0.0));
+        // The arrow's +x turned by its orientation is the force's direction.
+        let q = a.pose.as_ref().unwrap().orientation.as_ref().unwrap();
+        let x_axis = [
+            1.0 - 2.0 * (q.y * q.y + q.z * q.z),
+            2.0 * (q.x * q.y + q.w * q.z),
+            2.0 * (q.x * q.z - q.w * q.y),
+        ];
+        let f = [-4.0, 0.0, 10.0f64];
+        let n = (16.0f64 + 100.0).sqrt();
+        for i in 0..3 {
+            assert!((x_axis[i] - f[i] / n).abs() < 1e-12, "{x_axis:?}");
+        }
         // Every field the messages carry is in the schemas.
         for (msg, schema) in [(&j, signals_schema()), (&c, contacts_schema())] {
             for k in msg.as_object().unwrap().keys() {

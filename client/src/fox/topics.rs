@@ -13,6 +13,7 @@
 //! | `/pivotsim/stats` | json | `pivotsim.SolverStats` | every step: solver totals and islands, input counters (the Plot panel charts any number in it) |
 //! | `/pivotsim/signals` | json | `pivotsim.Signals` | every step: the sensor channels, `values.<sensor>.<channel>` (null on a dropout), fault and event counters |
 //! | `/pivotsim/contacts` | json | `pivotsim.Contacts` | every step: per contact the bodies, stick/slip/open, normal and friction force |
+//! | `/pivotsim/contact_forces` | protobuf | `foxglove.SceneUpdate` | every step: the contact forces as arrows at the contact points (world frame) |
 //! | `/pivotsim/events` | json | `pivotsim.Events` | each step that has events: name, kind, time, value, level |
 //! | `/pivotsim/cmd/joystick`, `…/winch`, `…/boom`, `…/actuator` | json | `pivotsim.Joystick`, … | operator inputs as seen (`record` only) |
 //!
@@ -40,6 +41,8 @@ pub const STATS: &str = "/pivotsim/stats";
 pub const SIGNALS: &str = "/pivotsim/signals";
 /// The signals frame's contact states as JSON.
 pub const CONTACTS: &str = "/pivotsim/contacts";
+/// The contact forces as arrows (`foxglove.SceneUpdate`).
+pub const CONTACT_FORCES: &str = "/pivotsim/contact_forces";
 /// The events frames as JSON.
 pub const EVENTS: &str = "/pivotsim/events";
 
@@ -107,6 +110,11 @@ pub fn contacts() -> ChannelSpec {
     json(CONTACTS, "pivotsim.Contacts", &super::signals::contacts_schema())
 }
 
+/// `/pivotsim/contact_forces`: `foxglove.SceneUpdate`.
+pub fn contact_forces() -> ChannelSpec {
+    well_known::<foxglove::schemas::SceneUpdate>(CONTACT_FORCES)
+}
+
 /// `/pivotsim/events`: `pivotsim.Events` (JSON).
 pub fn events() -> ChannelSpec {
     json(EVENTS, "pivotsim.Events", &super::signals::events_schema())
@@ -172,12 +180,17 @@ mod tests {
         }
         assert!(plotted >= 10 && sensors >= 5, "{plotted} paths, {sensors} sensor channels");
         assert_eq!(layout["configById"]["3D!pivotsim"]["topics"][SCENE]["visible"], true);
+        assert_eq!(layout["configById"]["3D!pivotsim"]["topics"][CONTACT_FORCES]["visible"], true);
         assert_eq!(layout["configById"]["3D!pivotsim"]["followTf"], WORLD_FRAME);
     }
 
     #[test]
     fn well_known_channels_carry_protobuf_schemas() {
-        for (spec, name) in [(tf(), "foxglove.FrameTransforms"), (scene(), "foxglove.SceneUpdate")] {
+        for (spec, name) in [
+            (tf(), "foxglove.FrameTransforms"),
+            (scene(), "foxglove.SceneUpdate"),
+            (contact_forces(), "foxglove.SceneUpdate"),
+        ] {
             assert_eq!((spec.encoding.as_str(), spec.schema.encoding.as_str()), ("protobuf", "protobuf"));
             assert_eq!(spec.schema.name, name);
             assert!(!spec.schema.data.is_empty());
