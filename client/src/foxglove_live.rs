@@ -14,8 +14,13 @@
 //! longer matches) is asked again and replaces the entities; unanswered asks back off from 1 s to
 //! 32 s.
 //!
+//! The signals frames become `/pivotsim/signals` (the sensor channels, plottable) and
+//! `/pivotsim/contacts` (the contact states) and `/pivotsim/contact_forces` (the contact forces as
+//! arrows, `foxglove.SceneUpdate`), the events frames `/pivotsim/events`
+//! ([`crate::fox::signals`]).
+//!
 //! Message timestamps: the server's wall time (`wall_time_ns`) for transforms and poses, the
-//! receive time for stats.
+//! receive time for stats, signals, contacts and events.
 
 use std::collections::HashMap;
 use std::process::ExitCode;
@@ -29,7 +34,7 @@ use pivotsim_msgs as msgs;
 use pivotsim_msgs::Topic;
 
 use crate::fox::topics::{self, ChannelSpec};
-use crate::fox::{frames, scene};
+use crate::fox::{self, frames, scene};
 use crate::net::{Received, Stream, TransportKind};
 use crate::tojson;
 use crate::util::scene_best_effort;
@@ -92,6 +97,10 @@ struct Channels {
     description: Arc<RawChannel>,
     poses: Arc<RawChannel>,
     stats: Arc<RawChannel>,
+    signals: Arc<RawChannel>,
+    contacts: Arc<RawChannel>,
+    contact_forces: Arc<RawChannel>,
+    events: Arc<RawChannel>,
 }
 
 fn channel(ctx: &Arc<Context>, spec: ChannelSpec) -> Result<Arc<RawChannel>> {
@@ -111,6 +120,10 @@ impl Channels {
             description: channel(ctx, topics::description())?,
             poses: channel(ctx, topics::poses())?,
             stats: channel(ctx, topics::stats())?,
+            signals: channel(ctx, topics::signals())?,
+            contacts: channel(ctx, topics::contacts())?,
+            contact_forces: channel(ctx, topics::contact_forces())?,
+            events: channel(ctx, topics::events())?,
         })
     }
 }
@@ -120,6 +133,8 @@ impl Channels {
 struct Counts {
     poses: u64,
     stats: u64,
+    signals: u64,
+    events: u64,
     scenes: u64,
     malformed: u64,
 }
@@ -130,6 +145,9 @@ struct View<'a> {
     latched: Arc<Mutex<Latched>>,
     scene: Option<msgs::SceneDescription>,
     last_sim_time: f64,
+    /// The simulation time went back since the scene was last answered (a reset or load seen
+    /// while an ask was backing off must still be asked, at the end of the wait).
+    went_back: bool,
     last_scene_ask: Option<Instant>,
     /// Wait before asking again: 1 s, doubled after each unanswered ask up to 32 s (an ask blocks
     /// up to a second when nobody answers, e.g. an iceoryx2-only server).
@@ -169,11 +187,11 @@ impl View<'_> {
         v: &msgs::PoseFrameView<'_>,
         link: Option<&crate::net::ZenohLink>,
     ) -> Result<()> {
-        let went_back = v.sim_time() < self.last_sim_time;
+        self.went_back |= v.sim_time() < self.last_sim_time;
         self.last_sim_time = v.sim_time();
         let stale = match &self.scene {
             None => true,
-            Some(s) => went_back || s.bodies.len() != v.bodies().len(),
+            Some(s) => self.went_back || s.bodies.len() != v.bodies().len(),
         };
         if !stale || self.last_scene_ask.is_some_and(|t| t.elapsed() < self.scene_retry) {
             return Ok(());
@@ -182,6 +200,7 @@ impl View<'_> {
         match scene_best_effort(self.common, link, Duration::from_secs(1)) {
             Some(s) => {
                 self.scene_retry = Duration::from_secs(1);
+                self.went_back = false;
                 self.set_scene(s)
             }
             None => {
@@ -218,6 +237,31 @@ impl View<'_> {
                 self.n.stats += 1;
                 Ok(true)
             }
+            Some(Topic::Signals) => {
+                let Ok(s) = msgs::SignalsFrame::decode(&r.bytes) else {
+                    self.n.malformed += 1;
+                    return Ok(false);
+                };
+                let meta = PartialMetadata::with_log_time(r.recv_ns);
+                let json = serde_json::to_vec(&fox::signals::signals_json(&s))?;
+                self.ch.signals.log_with_meta(&json, meta);
+                let json = serde_json::to_vec(&fox::signals::contacts_json(&s, self.scene.as_ref()))?;
+                self.ch.contacts.log_with_meta(&json, meta);
+                let arrows = fox::signals::contact_forces(&s, frames::timestamp(r.recv_ns));
+                self.ch.contact_forces.log_with_meta(&topics::encode(&arrows), meta);
+                self.n.signals += 1;
+                Ok(true)
+            }
+            Some(Topic::Events) => {
+                let Ok(e) = msgs::EventsFrame::decode(&r.bytes) else {
+                    self.n.malformed += 1;
+                    return Ok(false);
+                };
+                let json = serde_json::to_vec(&fox::signals::events_json(&e))?;
+                self.ch.events.log_with_meta(&json, PartialMetadata::with_log_time(r.recv_ns));
+                self.n.events += 1;
+                Ok(true)
+            }
             _ => Ok(false),
         }
     }
@@ -230,7 +274,7 @@ pub fn run(common: &Common, args: &Args) -> Result<ExitCode> {
     let stream = Stream::open(
         common,
         args.transport,
-        &[Topic::Poses, Topic::Stats],
+        &[Topic::Poses, Topic::Stats, Topic::Signals, Topic::Events],
         1024,
         Duration::from_micros(500),
         None,
@@ -263,6 +307,7 @@ pub fn run(common: &Common, args: &Args) -> Result<ExitCode> {
         latched,
         scene: None,
         last_sim_time: 0.0,
+        went_back: false,
         last_scene_ask: None,
         scene_retry: Duration::from_secs(1),
         common,
@@ -278,9 +323,11 @@ pub fn run(common: &Common, args: &Args) -> Result<ExitCode> {
     server.stop().wait_blocking();
     let n = &view.n;
     eprintln!(
-        "pivotsim-client: sent {} transforms, {} stats, {} scenes ({} malformed skipped, {} dropped)",
+        "pivotsim-client: sent {} transforms, {} stats, {} signals, {} events, {} scenes ({} malformed skipped, {} dropped)",
         n.poses,
         n.stats,
+        n.signals,
+        n.events,
         n.scenes,
         n.malformed,
         stream.inbox.dropped()

@@ -11,7 +11,15 @@
 //! | `/tf` | `foxglove.FrameTransforms` (protobuf) | `world` → body name transforms: the 3D panel shows every body's frame |
 //! | `/pivotsim/scene` | `foxglove.SceneUpdate` (protobuf) | the bodies' shapes once at the start (when the server answers) |
 //! | `/pivotsim/description` | `pivotsim.SceneDescription` (json) | the scene description once at the start (when the server answers) |
+//! | `/pivotsim/signals` | `pivotsim.Signals` (json) | every signals frame: `values.<sensor>.<channel>` (null on a dropout), counters |
+//! | `/pivotsim/contacts` | `pivotsim.Contacts` (json) | every signals frame: per contact the bodies, state, normal and friction force |
+//! | `/pivotsim/contact_forces` | `foxglove.SceneUpdate` (protobuf) | every signals frame: the contact forces as arrows (the largest 0.5 m long) |
+//! | `/pivotsim/events` | `pivotsim.Events` (json) | every events frame: name, kind, time, value, level per event |
 //! | `/pivotsim/cmd/joystick` … `cmd/actuator` | `pivotsim.Joystick` … (json) | inputs, as seen (channel added at the first one) |
+//!
+//! Faults sent live (`pivotsim-client fault`) are in the recording as `fault` events with their
+//! sim time, and their effect (a dropout, a parted rope's tension) in the signals: a recording
+//! replays them.
 //!
 //! The world is in the metadata record `pivotsim` (with the transport, scene and timestep), not in
 //! the topics. Log time is the receive time; publish time is the server's `wall_time_ns` for poses
@@ -35,7 +43,7 @@ use pivotsim_msgs as msgs;
 use pivotsim_msgs::Topic;
 
 use crate::fox::topics::{self, ChannelSpec};
-use crate::fox::{frames, scene};
+use crate::fox::{self, frames, scene};
 use crate::net::{Received, Stream, TransportKind};
 use crate::tojson;
 use crate::{Common, interrupted, secs};
@@ -63,6 +71,10 @@ struct Channels {
     poses: u16,
     stats: u16,
     tf: Option<u16>,
+    signals: u16,
+    contacts: u16,
+    contact_forces: u16,
+    events: u16,
     inputs: Vec<(Topic, u16)>,
     input_seq: u32,
 }
@@ -120,6 +132,10 @@ fn open_file(
         poses: add_channel(&mut w, &topics::poses())?,
         stats: add_channel(&mut w, &topics::stats())?,
         tf: None,
+        signals: add_channel(&mut w, &topics::signals())?,
+        contacts: add_channel(&mut w, &topics::contacts())?,
+        contact_forces: add_channel(&mut w, &topics::contact_forces())?,
+        events: add_channel(&mut w, &topics::events())?,
         inputs: Vec::new(),
         input_seq: 0,
     };
@@ -142,6 +158,8 @@ fn open_file(
 struct Counts {
     poses: u64,
     stats: u64,
+    signals: u64,
+    events: u64,
     inputs: u64,
     malformed: u64,
 }
@@ -177,6 +195,28 @@ impl Recorder<'_> {
         Ok(true)
     }
 
+    /// A signals frame: its channels and its contact states.
+    fn signals(&mut self, r: &Received) -> Result<bool> {
+        let Ok(s) = msgs::SignalsFrame::decode(&r.bytes) else { return Ok(false) };
+        let seq = s.sequence as u32;
+        let json = fox::signals::signals_json(&s);
+        write_json(&mut self.w, self.ch.signals, seq, r.recv_ns, r.recv_ns, &json)?;
+        let json = fox::signals::contacts_json(&s, self.scene);
+        write_json(&mut self.w, self.ch.contacts, seq, r.recv_ns, r.recv_ns, &json)?;
+        let arrows = topics::encode(&fox::signals::contact_forces(&s, frames::timestamp(r.recv_ns)));
+        write(&mut self.w, self.ch.contact_forces, seq, r.recv_ns, r.recv_ns, &arrows)?;
+        self.n.signals += 1;
+        Ok(true)
+    }
+
+    fn events(&mut self, r: &Received) -> Result<bool> {
+        let Ok(e) = msgs::EventsFrame::decode(&r.bytes) else { return Ok(false) };
+        let json = fox::signals::events_json(&e);
+        write_json(&mut self.w, self.ch.events, e.sequence as u32, r.recv_ns, r.recv_ns, &json)?;
+        self.n.events += 1;
+        Ok(true)
+    }
+
     /// An input, on its topic's channel (added at its first message).
     fn input(&mut self, r: &Received) -> Result<bool> {
         let Ok(c) = msgs::InputCommand::decode(&r.bytes) else { return Ok(false) };
@@ -200,6 +240,8 @@ impl Recorder<'_> {
         let (from_server, ok) = match r.topic {
             Some(Topic::Poses) => (true, self.poses(r)?),
             Some(Topic::Stats) => (true, self.stats(r)?),
+            Some(Topic::Signals) => (true, self.signals(r)?),
+            Some(Topic::Events) => (true, self.events(r)?),
             Some(t) if Topic::INPUTS.contains(&t) => (false, self.input(r)?),
             _ => (false, false),
         };
@@ -214,7 +256,16 @@ impl Recorder<'_> {
 /// Ctrl-C or a silence longer than `--timeout`.
 pub fn run(common: &Common, args: &Args) -> Result<ExitCode> {
     let world = common.world()?;
-    let topics = [Topic::Poses, Topic::Stats, Topic::Joystick, Topic::Winch, Topic::Boom, Topic::Actuator];
+    let topics = [
+        Topic::Poses,
+        Topic::Stats,
+        Topic::Signals,
+        Topic::Events,
+        Topic::Joystick,
+        Topic::Winch,
+        Topic::Boom,
+        Topic::Actuator,
+    ];
     let stream = Stream::open(common, args.transport, &topics, 8192, Duration::from_micros(500), None)?;
     let scene = crate::util::scene_best_effort(common, stream.zenoh(), common.timeout_or(2.0));
     if scene.is_none() {
@@ -251,10 +302,12 @@ pub fn run(common: &Common, args: &Args) -> Result<ExitCode> {
             last_status = Instant::now();
             let n = &rec.n;
             eprint!(
-                "\r{:6.1} s  poses {}  stats {}  inputs {}  malformed {}  dropped {}   ",
+                "\r{:6.1} s  poses {}  stats {}  signals {}  events {}  inputs {}  malformed {}  dropped {}   ",
                 start.elapsed().as_secs_f64(),
                 n.poses,
                 n.stats,
+                n.signals,
+                n.events,
                 n.inputs,
                 n.malformed,
                 stream.inbox.dropped()
@@ -273,10 +326,12 @@ pub fn run(common: &Common, args: &Args) -> Result<ExitCode> {
     }
     let n = &rec.n;
     eprintln!(
-        "pivotsim-client: wrote {}: {} pose frames, {} stats, {} inputs in {:.1} s ({} malformed skipped, {} dropped)",
+        "pivotsim-client: wrote {}: {} pose frames, {} stats, {} signals, {} events, {} inputs in {:.1} s ({} malformed skipped, {} dropped)",
         args.file.display(),
         n.poses,
         n.stats,
+        n.signals,
+        n.events,
         n.inputs,
         start.elapsed().as_secs_f64(),
         n.malformed,

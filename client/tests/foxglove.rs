@@ -11,7 +11,9 @@
 //! The forklift is served paused, the view connects and subscribes after the scene was published
 //! (so its entities arrive only through the late-joiner path), then the server resumes and the
 //! scripted operator drives the truck forward: the chassis' transform must move. A reset then
-//! brings the scene again (new entities) and the chassis back. Every wait is bounded in time.
+//! brings the scene again (new entities) and the chassis back. The signals channel
+//! (`/pivotsim/signals`, JSON) is advertised with its JSON schema and its messages carry the
+//! forklift's fork-load sensor (`values.forks_load.normal`, N). Every wait is bounded in time.
 
 mod common;
 
@@ -194,7 +196,7 @@ fn foxglove_view_streams_the_forklift_moving() {
     let deadline = Instant::now() + Duration::from_secs(20);
     let mut info = None;
     let mut channels: Vec<Value> = Vec::new();
-    let wanted = ["/tf", "/pivotsim/scene", "/pivotsim/stats"];
+    let wanted = ["/tf", "/pivotsim/scene", "/pivotsim/stats", "/pivotsim/signals", "/pivotsim/events"];
     while !wanted.iter().all(|t| channels.iter().any(|c| c["topic"] == *t)) {
         assert!(Instant::now() < deadline, "not advertised within 20 s: {channels:?}");
         match next(&mut ws) {
@@ -225,9 +227,18 @@ fn foxglove_view_streams_the_forklift_moving() {
     );
     assert_eq!(stats["schemaEncoding"], "jsonschema");
     assert!(!tf["schema"].as_str().unwrap().is_empty(), "the protobuf schema is sent");
+    let signals = channel("/pivotsim/signals");
+    assert_eq!(
+        (signals["encoding"].as_str(), signals["schemaName"].as_str(), signals["schemaEncoding"].as_str()),
+        (Some("json"), Some("pivotsim.Signals"), Some("jsonschema"))
+    );
+    let schema: Value = serde_json::from_str(signals["schema"].as_str().unwrap()).expect("a JSON schema");
+    assert!(schema["properties"]["values"].is_object(), "{schema}");
+    assert_eq!(channel("/pivotsim/events")["schemaName"], "pivotsim.Events");
 
     let subscribe = json!({"op": "subscribe", "subscriptions": [
-        {"id": 10, "channelId": tf["id"]}, {"id": 11, "channelId": scene["id"]}, {"id": 12, "channelId": stats["id"]}]});
+        {"id": 10, "channelId": tf["id"]}, {"id": 11, "channelId": scene["id"]}, {"id": 12, "channelId": stats["id"]},
+        {"id": 13, "channelId": signals["id"]}]});
     ws.send(Message::Text(subscribe.to_string().into())).unwrap();
 
     // Paused: the first chassis transform, the scene (late joiner) and a stats message.
@@ -235,6 +246,7 @@ fn foxglove_view_streams_the_forklift_moving() {
     let mut last = [0.0; 3];
     let mut scene_entities = Vec::new();
     let mut stats_seen = 0;
+    let mut signals_seen = 0;
     let mut resumed = false;
     let mut tf_frames = 0;
     let deadline = Instant::now() + Duration::from_secs(40);
@@ -242,7 +254,7 @@ fn foxglove_view_streams_the_forklift_moving() {
         assert!(
             Instant::now() < deadline,
             "the chassis did not move within 40 s: first {first:?}, last {last:?}, {tf_frames} transform frames, \
-             {} entities, {stats_seen} stats, resumed {resumed}",
+             {} entities, {stats_seen} stats, {signals_seen} signals, resumed {resumed}",
             scene_entities.len()
         );
         let Some(Message::Binary(b)) = next(&mut ws) else { continue };
@@ -264,6 +276,13 @@ fn foxglove_view_streams_the_forklift_moving() {
                 assert!(v["total_solve_us"].is_number(), "{v}");
                 stats_seen += 1;
             }
+            13 => {
+                let v: Value = serde_json::from_slice(payload).expect("signals are JSON");
+                let load = &v["values"]["forks_load"];
+                assert!(load["normal"].is_number() && load["sliding"].is_number(), "{v}");
+                assert!(v["values"]["lift_l"]["force"].is_number(), "{v}");
+                signals_seen += 1;
+            }
             other => panic!("unknown subscription id {other}"),
         }
         if !resumed && first.is_some() && !scene_entities.is_empty() && stats_seen > 0 {
@@ -273,9 +292,9 @@ fn foxglove_view_streams_the_forklift_moving() {
             resumed = true;
         }
         let moved = first.map_or(0.0, |f| ((last[0] - f[0]).powi(2) + (last[1] - f[1]).powi(2)).sqrt());
-        if resumed && moved > 0.05 {
+        if resumed && moved > 0.05 && signals_seen > 0 {
             eprintln!(
-                "chassis {first:?} → {last:?} ({moved:.3} m) after {tf_frames} transform frames; {} entities, {stats_seen} stats",
+                "chassis {first:?} → {last:?} ({moved:.3} m) after {tf_frames} transform frames; {} entities, {stats_seen} stats, {signals_seen} signals",
                 scene_entities.len()
             );
             break;
@@ -295,7 +314,11 @@ fn foxglove_view_streams_the_forklift_moving() {
     let deadline = Instant::now() + Duration::from_secs(20);
     let (mut rescene, mut back) = (false, false);
     while !(rescene && back) {
-        assert!(Instant::now() < deadline, "after the reset: scene again {rescene}, chassis back {back}");
+        assert!(
+            Instant::now() < deadline,
+            "after the reset: scene again {rescene}, chassis back {back}\n{}",
+            view.stderr_so_far()
+        );
         let Some(Message::Binary(b)) = next(&mut ws) else { continue };
         let (sub, _, payload) = message_data(&b);
         match sub {

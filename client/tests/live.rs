@@ -254,6 +254,60 @@ fn send_all_four(args: &[String]) {
     }
 }
 
+/// The count the recorder printed before `label` (`… 812 signals, 1 events, …`).
+fn printed_count(stderr: &str, label: &str) -> usize {
+    let line = stderr.lines().find(|l| l.contains("wrote ")).unwrap_or_else(|| panic!("{stderr}"));
+    let before = line.split(&format!(" {label},")).next().unwrap();
+    before.rsplit(' ').next().unwrap().parse().unwrap_or_else(|_| panic!("{label} in {line}"))
+}
+
+/// Sends the dropout fault on the test scene's `axle` sensor.
+fn drop_out_axle(server_args: &[String]) {
+    let mut a = server_args.to_vec();
+    a.extend(["fault", "dropout", "axle"].map(String::from));
+    common::run_client(&a, LIMIT).ok();
+}
+
+/// The signals, contacts and events channels: schemas, one message per frame the recorder counted,
+/// the `axle` sensor's channels plottable, and the live dropout fault replayable from the file.
+fn check_signals(path: &std::path::Path, stderr: &str) {
+    let m = read_mcap(path);
+    for (t, schema) in [
+        ("/pivotsim/signals", "pivotsim.Signals"),
+        ("/pivotsim/contacts", "pivotsim.Contacts"),
+        ("/pivotsim/events", "pivotsim.Events"),
+    ] {
+        let r = m.get(t).unwrap_or_else(|| panic!("no channel {t}: {:?}", m.keys()));
+        assert_eq!((r.schema.as_str(), r.schema_encoding.as_str()), (schema, "jsonschema"), "{t}");
+    }
+    let arrows = &m["/pivotsim/contact_forces"];
+    assert_eq!(
+        (arrows.schema.as_str(), arrows.schema_encoding.as_str()),
+        ("foxglove.SceneUpdate", "protobuf")
+    );
+    let (signals, events) = (printed_count(stderr, "signals"), printed_count(stderr, "events"));
+    assert!(signals >= 10, "{signals} signals frames");
+    assert_eq!(m["/pivotsim/signals"].messages.len(), signals);
+    assert_eq!(m["/pivotsim/contacts"].messages.len(), signals);
+    assert_eq!(arrows.messages.len(), signals);
+    assert_eq!(m["/pivotsim/events"].messages.len(), events);
+    let sig = m["/pivotsim/signals"].json();
+    assert!(sig.windows(2).all(|w| w[1]["sequence"].as_u64() > w[0]["sequence"].as_u64()));
+    let first = &sig[0]["values"]["axle"];
+    for c in ["fx", "fy", "fz", "tx", "ty", "tz"] {
+        assert!(first[c].is_number(), "axle/{c} in {first}");
+    }
+    // The live fault: one `fault` event naming the sensor, then its channels dropped out.
+    let ev: Vec<Value> =
+        m["/pivotsim/events"].json().iter().flat_map(|e| e["events"].as_array().unwrap().clone()).collect();
+    let fault =
+        ev.iter().find(|e| e["kind"] == "fault").unwrap_or_else(|| panic!("no fault event in {ev:?}"));
+    assert!(fault["name"].as_str().unwrap().contains("axle"), "{fault}");
+    let last = sig.last().unwrap();
+    assert!(last["values"]["axle"]["fx"].is_null(), "{last}");
+    assert_eq!(last["dropout_count"], 6, "{last}");
+}
+
 fn check_recording(path: &std::path::Path) {
     let m = read_mcap(path);
     for (t, schema, encoding) in [
@@ -299,6 +353,7 @@ fn record_over_iceoryx2_writes_every_channel() {
     );
     let rec = spawn_client(&a, LIMIT);
     rec.wait_for_stderr("recording world", LIMIT);
+    drop_out_axle(&s.args());
     let mut a = s.args();
     a.extend(["send", "--transport", "iceoryx2"].map(String::from));
     let t = Instant::now();
@@ -309,6 +364,7 @@ fn record_over_iceoryx2_writes_every_channel() {
     let out = rec.wait().ok();
     assert!(out.stderr.contains("4 inputs"), "{}", out.stderr);
     check_recording(&path);
+    check_signals(&path, &out.stderr);
     let _ = std::fs::remove_dir_all(&dir);
 }
 
@@ -325,12 +381,14 @@ fn record_over_zenoh_sees_inputs_of_peers_connected_to_it() {
     );
     let rec = spawn_client(&a, LIMIT);
     rec.wait_for_stderr("recording world", LIMIT);
+    drop_out_axle(&s.args());
     let mut a = s.args();
     a.extend(["--connect", &rec_endpoint, "send"].map(String::from));
     send_all_four(&a);
     rec.interrupt();
     let out = rec.wait().ok();
     check_recording(&path);
+    check_signals(&path, &out.stderr);
     assert!(out.stderr.contains("0 malformed"), "{}", out.stderr);
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -38,7 +38,7 @@ pub const SIGNALS_FIXED_LEN: usize = 40;
 /// Bytes of one channel record.
 pub const CHANNEL_RECORD_LEN: usize = 48;
 /// Bytes of one contact record.
-pub const CONTACT_RECORD_LEN: usize = 56;
+pub const CONTACT_RECORD_LEN: usize = 104;
 /// Most channels in one frame.
 pub const MAX_CHANNELS: usize = 4096;
 /// Most contact records in one frame.

@@ -11,7 +11,7 @@
 //!              32     4  faults_applied    u32, since (re)load
 //!              36     4  faults_rejected   u32, since (re)load
 //!              40  48·n  channel record × n
-//!        40 + 48n  56·k  contact record × k
+//!        40 + 48n 104·k  contact record × k
 //!
 //! channel record   size  field
 //!               0    32  name              name field ([A-Za-z0-9_.-/], 1..=32 bytes, NUL-padded)
@@ -27,6 +27,8 @@
 //!              16    24  point             f64 × 3, on A, world frame (m)
 //!              40     8  normal_force      f64, N, finite, ≥ 0
 //!              48     8  friction_force    f64, N, finite, ≥ 0
+//!              56    24  normal            f64 × 3, unit, A to B, world frame
+//!              80    24  friction          f64 × 3, the friction force on B, world frame (N)
 //!
 //! events payload   size  field
 //!               0     8  sequence          u64
@@ -113,8 +115,12 @@ pub struct ContactRecord {
     pub point: [f64; 3],
     /// Normal force (N).
     pub normal_force: f64,
-    /// Friction force (N).
+    /// Friction force (N, its magnitude).
     pub friction_force: f64,
+    /// Unit normal from A to B (world).
+    pub normal: [f64; 3],
+    /// Friction force on B (world, N; A receives the opposite).
+    pub friction: [f64; 3],
 }
 
 /// An owned signals frame.
@@ -302,7 +308,14 @@ impl ContactRecord {
             finite(Some(i), "point", v)?;
         }
         non_negative(Some(i), "normal_force", self.normal_force)?;
-        non_negative(Some(i), "friction_force", self.friction_force)
+        non_negative(Some(i), "friction_force", self.friction_force)?;
+        for v in self.normal {
+            finite(Some(i), "normal", v)?;
+        }
+        for v in self.friction {
+            finite(Some(i), "friction", v)?;
+        }
+        Ok(())
     }
 }
 
@@ -315,7 +328,7 @@ impl EventRecord {
 }
 
 impl SignalsFrame {
-    /// Frame length in bytes: `16 + 40 + 48 · channels + 56 · contacts`.
+    /// Frame length in bytes: `16 + 40 + 48 · channels + 104 · contacts`.
     pub fn encoded_len(&self) -> usize {
         HEADER_LEN
             + SIGNALS_FIXED_LEN
@@ -361,6 +374,8 @@ impl SignalsFrame {
             buf.extend_from_slice(&[c.state as u8, 0, 0, 0, 0, 0, 0, 0]);
             le::put_f64s(buf, &c.point);
             le::put_f64s(buf, &[c.normal_force, c.friction_force]);
+            le::put_f64s(buf, &c.normal);
+            le::put_f64s(buf, &c.friction);
         }
         header::set_payload_len(buf);
         Ok(())
@@ -429,6 +444,8 @@ impl SignalsFrame {
                 point: le::f64s_at::<3>(r, 16),
                 normal_force: nf,
                 friction_force: ff,
+                normal: le::f64s_at::<3>(r, 56),
+                friction: le::f64s_at::<3>(r, 80),
             };
             c.validate(i).map_err(DecodeError::Invalid)?;
             self.contacts.push(c);
@@ -541,6 +558,8 @@ mod tests {
                 point: [1.0, -2.0, 0.0],
                 normal_force: 100.0,
                 friction_force: 50.0,
+                normal: [0.0, 0.0, 1.0],
+                friction: [0.0, 50.0, 0.0],
             }],
         }
     }
@@ -578,6 +597,14 @@ mod tests {
         let mut x = b.clone();
         x[ct + 40..ct + 48].copy_from_slice(&(-1.0f64).to_le_bytes());
         assert!(matches!(SignalsFrame::decode(&x), Err(DecodeError::Invalid(SignalsError::Negative { .. }))));
+        for (at, field) in [(56, "normal"), (80 + 16, "friction")] {
+            let mut x = b.clone();
+            x[ct + at..ct + at + 8].copy_from_slice(&f64::NAN.to_le_bytes());
+            assert_eq!(
+                SignalsFrame::decode(&x),
+                Err(DecodeError::Invalid(SignalsError::NonFinite { record: Some(0), field }))
+            );
+        }
         let mut x = b.clone();
         x[ch] = b' ';
         assert!(matches!(SignalsFrame::decode(&x), Err(DecodeError::Invalid(SignalsError::Name { .. }))));

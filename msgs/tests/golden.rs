@@ -73,7 +73,7 @@ fn golden_signals_and_events() {
     let mut got = Vec::new();
     sample_signals().encode(&mut got).unwrap();
     assert_eq!(got, want, "encoded:\n{}", dump(&got));
-    assert_eq!(want.len(), 160);
+    assert_eq!(want.len(), 208);
     assert_eq!(SignalsFrame::decode(&want).unwrap(), sample_signals());
     let want = hex_dump("<!-- golden:events -->");
     sample_events().encode(&mut got).unwrap();

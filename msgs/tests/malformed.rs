@@ -559,6 +559,8 @@ fn signals_and_events_content_errors() {
         (ct0 + 16, f64::NAN, SignalsError::NonFinite { record: Some(0), field: "point" }),
         (ct0 + 40, -1.0, SignalsError::Negative { record: Some(0), field: "normal_force", value: -1.0 }),
         (ct0 + 48, f64::NAN, SignalsError::NonFinite { record: Some(0), field: "friction_force" }),
+        (ct0 + 64, f64::INFINITY, SignalsError::NonFinite { record: Some(0), field: "normal" }),
+        (ct0 + 88, f64::NAN, SignalsError::NonFinite { record: Some(0), field: "friction" }),
     ];
     for (off, v, want) in cases {
         let mut c = b.clone();

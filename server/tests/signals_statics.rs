@@ -187,12 +187,17 @@ above = 0.5
 /// contact does not slide: at least one of its four pressed corners sticks — which of the
 /// redundant corners the solver puts at its bound is not unique); above, every corner slips, the
 /// contact slides and that is one event.
+/// Every pressed corner reports a unit normal across the slope and a friction vector in the
+/// slope's plane with the reported magnitude; on the box they sum to a force up the slope,
+/// `m g sin θ` once it rests.
 #[test]
 fn box_on_incline_sticks_below_tan_theta_mu_and_slips_above() {
     for ratio in [0.5, 0.95, 1.05, 1.5] {
         let mut s = load(&incline(ratio));
-        let x0 = s.world.body(s.world.body_id("box").unwrap()).unwrap().position();
+        let box_id = s.world.body_id("box").unwrap();
+        let x0 = s.world.body(box_id).unwrap().position();
         let mut slip_events = 0;
+        let mut last_up = 0.0;
         for _ in 0..60 {
             s.step().unwrap();
             slip_events += s.signals.events().iter().filter(|e| e.kind == EventKind::Raised).count();
@@ -207,9 +212,28 @@ fn box_on_incline_sticks_below_tan_theta_mu_and_slips_above() {
                 assert!(slipping == 4 && sliding == 1.0, "ratio {ratio}: {pressed:?}");
             }
             let f = s.signals.sensor_values("grip").unwrap();
+            // The directions (the wire's contact record): a unit normal across the slope, the
+            // friction vector in the slope's plane with the reported magnitude; on the box, the
+            // friction of the four corners sums to `m g sin θ` up the slope while it sticks.
+            let theta = (ratio * 0.5f64).atan();
+            let (sn, cs) = theta.sin_cos();
+            let up_slope = nalgebra::Vector3::new(-cs, 0.0, sn);
+            let slope_normal = nalgebra::Vector3::new(sn, 0.0, cs);
+            let mut up = 0.0;
             for c in &pressed {
                 assert!(c.friction_force <= 0.5 * c.normal_force * (1.0 + 1e-9) * 2f64.sqrt(), "{c:?}");
+                assert!((c.normal.norm() - 1.0).abs() < 1e-9, "{c:?}");
+                assert!((c.normal.dot(&slope_normal).abs() - 1.0).abs() < 1e-9, "{c:?}");
+                assert!(
+                    (c.friction.norm() - c.friction_force).abs() <= 1e-9 * (1.0 + c.friction_force),
+                    "{c:?}"
+                );
+                assert!(c.friction.dot(&c.normal).abs() <= 1e-9 * (1.0 + c.friction_force), "{c:?}");
+                let on_box = if c.bodies[1] == box_id { c.friction } else { -c.friction };
+                up += on_box.dot(&up_slope);
             }
+            assert!(up > 0.0, "ratio {ratio}: friction on the box points up the slope ({up} N)");
+            last_up = up;
             let _ = f;
         }
         let x1 = s.world.body(s.world.body_id("box").unwrap()).unwrap().position();
@@ -222,6 +246,10 @@ fn box_on_incline_sticks_below_tan_theta_mu_and_slips_above() {
             assert!((f[3] - w * theta.cos()).abs() < 1e-6 * w, "ratio {ratio}: normal {f:?}");
             assert!((f[4] - w * theta.sin()).abs() < 1e-6 * w, "ratio {ratio}: friction {f:?}");
             assert!((f[2] - w).abs() < 1e-6 * w, "ratio {ratio}: vertical {f:?}");
+            assert!(
+                (last_up - w * theta.sin()).abs() < 1e-6 * w,
+                "ratio {ratio}: friction vectors {last_up} N"
+            );
             assert!(moved < 1e-6, "ratio {ratio}: a sticking box moved {moved} m");
             assert_eq!(slip_events, 0);
         } else {

@@ -283,7 +283,7 @@ pub fn scene_update(scene: &msgs::SceneDescription, stamp: Timestamp) -> SceneSh
     SceneShapes { update: SceneUpdate { deletions: vec![clear], entities }, skipped }
 }
 
-/// Entity id of the contact-force arrows on [`topics::CONTACTS`](super::topics::CONTACTS).
+/// Entity id of the contact-force arrows (the `/pivotsim/contact_forces` scene update).
 pub const CONTACTS_ENTITY: &str = "contacts";
 
 /// The quaternion `[x, y, z, w]` that turns +x onto the unit vector `d` (Foxglove's arrows point
@@ -295,12 +295,11 @@ fn x_onto(d: [f64; 3]) -> [f64; 4] {
     if n < 1e-12 { [0.0, 0.0, 1.0, 0.0] } else { q.map(|c| c / n.sqrt()) }
 }
 
-/// **Hook for the signals frame** (issue 17: contact forces are not on the wire yet). Contact
-/// forces as arrows in the world frame, one entity [`CONTACTS_ENTITY`] replaced at each call: an
-/// arrow per `(point, force)` (m, N), tail at the point, along the force, `|f| · metres_per_newton`
-/// long; forces below 1e-9 N are left out. When the signals frame carries contact points and
-/// forces, the live view publishes this on `/pivotsim/contacts` every step (and `record` writes it).
-#[allow(dead_code)] // until the signals frame exists
+/// Contact forces as arrows in the world frame, one entity [`CONTACTS_ENTITY`] replaced at each
+/// call: an arrow per `(point, force)` (m, N), tail at the point, along the force,
+/// `|f| · metres_per_newton` long; forces below 1e-9 N are left out. The live view and `record`
+/// publish it on `/pivotsim/contact_forces` for every signals frame
+/// ([`super::signals::contact_forces`]).
 pub fn force_arrows(
     forces: impl IntoIterator<Item = ([f64; 3], [f64; 3])>,
     metres_per_newton: f64,

@@ -11,11 +11,13 @@
 //! | `/pivotsim/description` | json | `pivotsim.SceneDescription` | the scene description, once per scene (and to each late subscriber) |
 //! | `/pivotsim/poses` | json | `pivotsim.PoseFrame` | every step: every body's pose and velocities |
 //! | `/pivotsim/stats` | json | `pivotsim.SolverStats` | every step: solver totals and islands, input counters (the Plot panel charts any number in it) |
+//! | `/pivotsim/signals` | json | `pivotsim.Signals` | every step: the sensor channels, `values.<sensor>.<channel>` (null on a dropout), fault and event counters |
+//! | `/pivotsim/contacts` | json | `pivotsim.Contacts` | every step: per contact the bodies, stick/slip/open, normal and friction force |
+//! | `/pivotsim/contact_forces` | protobuf | `foxglove.SceneUpdate` | every step: the contact forces as arrows at the contact points (world frame) |
+//! | `/pivotsim/events` | json | `pivotsim.Events` | each step that has events: name, kind, time, value, level |
 //! | `/pivotsim/cmd/joystick`, `…/winch`, `…/boom`, `…/actuator` | json | `pivotsim.Joystick`, … | operator inputs as seen (`record` only) |
 //!
-//! Reserved for the signals frame (issue 17; not on the wire yet): `/pivotsim/signals` (json,
-//! plottable sensor values) and `/pivotsim/contacts` (`foxglove.SceneUpdate`, contact forces as
-//! arrows in the world frame). See [`SIGNALS`] and [`CONTACTS`].
+//! The signals, contacts and events messages are those of [`super::signals`].
 
 use foxglove::{Encode, Schema};
 use pivotsim_msgs::Topic;
@@ -35,13 +37,14 @@ pub const DESCRIPTION: &str = "/pivotsim/description";
 pub const POSES: &str = "/pivotsim/poses";
 /// Solver stats.
 pub const STATS: &str = "/pivotsim/stats";
-/// Reserved: the signals frame as JSON (sensor values for the Plot panel), once it is on the wire.
-#[allow(dead_code)] // until the signals frame exists
+/// The signals frame's channels as JSON (sensor values for the Plot panel).
 pub const SIGNALS: &str = "/pivotsim/signals";
-/// Reserved: contact forces as arrows (`foxglove.SceneUpdate`, [`super::scene::force_arrows`]),
-/// once the signals frame carries them.
-#[allow(dead_code)] // until the signals frame exists
+/// The signals frame's contact states as JSON.
 pub const CONTACTS: &str = "/pivotsim/contacts";
+/// The contact forces as arrows (`foxglove.SceneUpdate`).
+pub const CONTACT_FORCES: &str = "/pivotsim/contact_forces";
+/// The events frames as JSON.
+pub const EVENTS: &str = "/pivotsim/events";
 
 /// A channel: topic, message encoding and schema.
 #[derive(Debug, Clone)]
@@ -97,6 +100,26 @@ pub fn stats() -> ChannelSpec {
     json(STATS, "pivotsim.SolverStats", &tojson::stats_schema())
 }
 
+/// `/pivotsim/signals`: `pivotsim.Signals` (JSON).
+pub fn signals() -> ChannelSpec {
+    json(SIGNALS, "pivotsim.Signals", &super::signals::signals_schema())
+}
+
+/// `/pivotsim/contacts`: `pivotsim.Contacts` (JSON).
+pub fn contacts() -> ChannelSpec {
+    json(CONTACTS, "pivotsim.Contacts", &super::signals::contacts_schema())
+}
+
+/// `/pivotsim/contact_forces`: `foxglove.SceneUpdate`.
+pub fn contact_forces() -> ChannelSpec {
+    well_known::<foxglove::schemas::SceneUpdate>(CONTACT_FORCES)
+}
+
+/// `/pivotsim/events`: `pivotsim.Events` (JSON).
+pub fn events() -> ChannelSpec {
+    json(EVENTS, "pivotsim.Events", &super::signals::events_schema())
+}
+
 /// `/pivotsim/cmd/<input>`: the input topic's JSON channel.
 pub fn input(topic: Topic) -> ChannelSpec {
     json(
@@ -118,34 +141,61 @@ pub fn encode<T: Encode>(msg: &T) -> Vec<u8> {
 mod tests {
     use super::*;
 
-    /// The shipped layout plots only fields that the stats channel has, and shows the scene topic.
+    /// The shipped layout plots only fields that its channels have: stats, signals and contacts
+    /// fields of their schemas, and `values.<sensor>.<channel>` of sensors the shipped scenes
+    /// declare; it shows the scene and the contact forces in the 3D panel.
     #[test]
-    fn the_layout_plots_fields_of_the_stats_schema() {
+    fn the_layout_plots_fields_of_its_channels() {
         let layout: serde_json::Value =
             serde_json::from_str(include_str!("../../../docs/foxglove/pivotsim-layout.json")).unwrap();
-        let stats = tojson::stats_schema();
-        let mut plotted = 0;
+        let scenes = [
+            include_str!("../../../scenes/forklift.toml"),
+            include_str!("../../../scenes/crane.toml"),
+            include_str!("../../../scenes/winch.toml"),
+        ];
+        let schemas = [
+            (STATS, tojson::stats_schema()),
+            (SIGNALS, super::super::signals::signals_schema()),
+            (CONTACTS, super::super::signals::contacts_schema()),
+        ];
+        let (mut plotted, mut sensors) = (0, 0);
         for (id, panel) in layout["configById"].as_object().unwrap() {
             for p in panel["paths"].as_array().into_iter().flatten() {
                 let path = p["value"].as_str().unwrap();
-                let field = path.strip_prefix(&format!("{STATS}.")).unwrap_or_else(|| panic!("{id}: {path}"));
-                assert!(stats["properties"].get(field).is_some(), "{id}: {field} is not a stats field");
+                let (schema, field) = schemas
+                    .iter()
+                    .find_map(|(t, s)| path.strip_prefix(&format!("{t}.")).map(|f| (s, f)))
+                    .unwrap_or_else(|| panic!("{id}: {path} is on no channel of the layout"));
+                if let Some(rest) = field.strip_prefix("values.") {
+                    let (sensor, channel) = rest.split_once('.').unwrap();
+                    let declared = format!("name = \"{sensor}\"");
+                    assert!(scenes.iter().any(|s| s.contains(&declared)), "{id}: no sensor {sensor}");
+                    assert!(!channel.is_empty() && !channel.contains('.'), "{id}: {path}");
+                    sensors += 1;
+                } else {
+                    assert!(schema["properties"].get(field).is_some(), "{id}: {field} is not in the schema");
+                }
                 plotted += 1;
             }
         }
-        assert!(plotted >= 5);
+        assert!(plotted >= 10 && sensors >= 5, "{plotted} paths, {sensors} sensor channels");
         assert_eq!(layout["configById"]["3D!pivotsim"]["topics"][SCENE]["visible"], true);
+        assert_eq!(layout["configById"]["3D!pivotsim"]["topics"][CONTACT_FORCES]["visible"], true);
         assert_eq!(layout["configById"]["3D!pivotsim"]["followTf"], WORLD_FRAME);
     }
 
     #[test]
     fn well_known_channels_carry_protobuf_schemas() {
-        for (spec, name) in [(tf(), "foxglove.FrameTransforms"), (scene(), "foxglove.SceneUpdate")] {
+        for (spec, name) in [
+            (tf(), "foxglove.FrameTransforms"),
+            (scene(), "foxglove.SceneUpdate"),
+            (contact_forces(), "foxglove.SceneUpdate"),
+        ] {
             assert_eq!((spec.encoding.as_str(), spec.schema.encoding.as_str()), ("protobuf", "protobuf"));
             assert_eq!(spec.schema.name, name);
             assert!(!spec.schema.data.is_empty());
         }
-        for spec in [description(), poses(), stats(), input(Topic::Boom)] {
+        for spec in [description(), poses(), stats(), signals(), contacts(), events(), input(Topic::Boom)] {
             assert_eq!((spec.encoding.as_str(), spec.schema.encoding.as_str()), ("json", "jsonschema"));
             serde_json::from_slice::<serde_json::Value>(&spec.schema.data).unwrap();
         }

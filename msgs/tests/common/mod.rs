@@ -532,14 +532,16 @@ pub fn signal_channel() -> impl Strategy<Value = SignalChannel> {
 }
 
 pub fn contact_record() -> impl Strategy<Value = ContactRecord> {
-    (any::<(u32, u32)>(), 0u8..3, vec3(), non_negative(), non_negative()).prop_map(
-        |((a, b), s, point, n, f)| ContactRecord {
+    (any::<(u32, u32)>(), 0u8..3, vec3(), non_negative(), non_negative(), vec3(), vec3()).prop_map(
+        |((a, b), s, point, n, f, normal, friction)| ContactRecord {
             body_a: a,
             body_b: b,
             state: ContactCode::from_code(s).unwrap(),
             point,
             normal_force: n,
             friction_force: f,
+            normal,
+            friction,
         },
     )
 }
@@ -598,6 +600,8 @@ pub fn sample_signals() -> SignalsFrame {
             point: [1.0, -0.5, 0.0],
             normal_force: 400.0,
             friction_force: 200.0,
+            normal: [0.0, 0.0, 1.0],
+            friction: [-200.0, 0.0, 0.0],
         }],
     }
 }

@@ -162,6 +162,8 @@ pub(crate) fn fill_signals(
             point: [finite(c.point.x), finite(c.point.y), finite(c.point.z)],
             normal_force: finite(c.normal_force).max(0.0),
             friction_force: finite(c.friction_force).max(0.0),
+            normal: [finite(c.normal.x), finite(c.normal.y), finite(c.normal.z)],
+            friction: [finite(c.friction.x), finite(c.friction.y), finite(c.friction.z)],
         });
     }
 }

@@ -51,6 +51,10 @@ pub struct ContactState {
     pub normal_force: f64,
     /// Friction force `|(λ₁, λ₂)| / h` (N, ≥ 0).
     pub friction_force: f64,
+    /// Unit normal from A to B (world).
+    pub normal: Vector3<f64>,
+    /// Friction force on B, `(λ₁ t₁ + λ₂ t₂) / h` (world, N).
+    pub friction: Vector3<f64>,
 }
 
 /// A scene's sensors, events and faults with their preallocated buffers (module doc of `signals`).
@@ -294,6 +298,10 @@ impl Signals {
                                 state: ContactStateKind::of(&c),
                                 normal_force: c.normal_impulse.max(0.0) / h,
                                 friction_force: friction_norm(&c) / h,
+                                normal: c.normal,
+                                friction: (c.tangents[0] * c.friction_impulse[0]
+                                    + c.tangents[1] * c.friction_impulse[1])
+                                    / h,
                             });
                         }
                     }
