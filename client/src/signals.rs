@@ -11,8 +11,7 @@ use anyhow::{Result, bail};
 use pivotsim_msgs as msgs;
 use pivotsim_msgs::Topic;
 
-use crate::net::Stream;
-use crate::watch::Args;
+use crate::net::{Stream, TransportKind};
 use crate::{Common, interrupted, secs};
 
 /// Events kept under the table.
@@ -78,8 +77,23 @@ fn table(s: &msgs::SignalsFrame, events: &[String]) -> String {
     t
 }
 
+/// What `watch --signals` was asked for (from `watch`'s arguments).
+#[derive(Debug, Clone, Copy)]
+pub struct View {
+    /// Transport to receive on.
+    pub transport: TransportKind,
+    /// Stop after this many steps.
+    pub count: Option<u64>,
+    /// Stop after this many seconds.
+    pub duration: Option<f64>,
+    /// One line per step even on a terminal.
+    pub plain: bool,
+    /// One JSON object per frame.
+    pub json: bool,
+}
+
 /// Runs `watch --signals`.
-pub fn run(common: &Common, args: &Args) -> Result<ExitCode> {
+pub fn run(common: &Common, args: &View) -> Result<ExitCode> {
     let tty = std::io::stdout().is_terminal() && !args.plain && !args.json;
     let stream = Stream::open(
         common,

@@ -405,7 +405,14 @@ impl Steps {
 /// Runs `watch`.
 pub fn run(common: &Common, args: &Args) -> Result<ExitCode> {
     if args.signals {
-        return crate::signals::run(common, args);
+        let view = crate::signals::View {
+            transport: args.transport,
+            count: args.count,
+            duration: args.duration,
+            plain: args.plain,
+            json: args.json,
+        };
+        return crate::signals::run(common, &view);
     }
     let mode = Mode::of(args);
     let poll = Duration::from_micros(500);

@@ -3,7 +3,7 @@
 use foxglove::schemas::{FrameTransform, FrameTransforms, Quaternion, Timestamp, Vector3};
 use pivotsim_msgs as msgs;
 
-use super::topics::WORLD_FRAME;
+use super::WORLD_FRAME;
 use crate::util::body_name;
 
 /// A time in ns since the UNIX epoch as a Foxglove timestamp (saturating past 2106).

@@ -6,3 +6,6 @@ pub mod frames;
 pub mod scene;
 pub mod signals;
 pub mod topics;
+
+/// The root frame every body's transform hangs from.
+pub const WORLD_FRAME: &str = "world";

@@ -327,7 +327,7 @@ pub fn force_arrows(
         deletions: Vec::new(),
         entities: vec![SceneEntity {
             timestamp: Some(stamp),
-            frame_id: super::topics::WORLD_FRAME.to_string(),
+            frame_id: super::WORLD_FRAME.to_string(),
             id: CONTACTS_ENTITY.to_string(),
             arrows,
             ..SceneEntity::default()

@@ -24,9 +24,6 @@ use pivotsim_msgs::Topic;
 
 use crate::tojson;
 
-/// The root frame every body's transform hangs from.
-pub const WORLD_FRAME: &str = "world";
-
 /// Body transforms.
 pub const TF: &str = "/tf";
 /// Body shapes as scene entities.
@@ -181,7 +178,7 @@ mod tests {
         assert!(plotted >= 10 && sensors >= 5, "{plotted} paths, {sensors} sensor channels");
         assert_eq!(layout["configById"]["3D!pivotsim"]["topics"][SCENE]["visible"], true);
         assert_eq!(layout["configById"]["3D!pivotsim"]["topics"][CONTACT_FORCES]["visible"], true);
-        assert_eq!(layout["configById"]["3D!pivotsim"]["followTf"], WORLD_FRAME);
+        assert_eq!(layout["configById"]["3D!pivotsim"]["followTf"], crate::fox::WORLD_FRAME);
     }
 
     #[test]

@@ -3,7 +3,7 @@
 
 use nalgebra::Vector3;
 
-use super::events::{Event, Threshold};
+use super::event::{Event, Threshold};
 use super::sensor::{BodySet, Sensor, SensorKind};
 use super::support::SupportPolygon;
 use crate::dynamics::{BodyId, ContactReport, JointId, World};

@@ -6,6 +6,7 @@
 //! | `sensor.rs` | what a sensor measures (resolved ids, body sets) and its channels |
 //! | `eval.rs` | [`Signals`]: every sensor evaluated after a step into preallocated channels |
 //! | `support.rs` | the support polygon and the tipping margin (load-moment indicator) |
+//! | `event.rs` | the events of a step and the declared thresholds (data) |
 //! | `events.rs` | threshold crossings on channels, with sim time |
 //!
 //! **From impulses to forces.** The step solves for impulses `λ` (paper eq. 1–3); a row's mean
@@ -59,11 +60,12 @@
 //! [`crate::serve`] publishes it. The solver never sees it.
 
 mod eval;
+mod event;
 mod events;
 mod sensor;
 mod support;
 
 pub use eval::{ContactState, ContactStateKind, MAX_CONTACT_RECORDS, MAX_QUEUED_EVENTS, Signals};
-pub use events::{Event, EventKind, EventName, Threshold, ThresholdDir};
+pub use event::{Event, EventKind, EventName, Threshold, ThresholdDir};
 pub use sensor::{BodySet, Sensor, SensorKind};
 pub use support::{SupportPolygon, TippingMargin};

@@ -1,0 +1,80 @@
+//! The events of a step and the thresholds that raise them: plain data, no evaluation (that is
+//! `events.rs`, on [`super::Signals`]'s channels).
+
+/// Which side of the level raises a threshold.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ThresholdDir {
+    /// Raised above the level.
+    Above,
+    /// Raised below the level.
+    Below,
+}
+
+/// A declared threshold on a channel.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Threshold {
+    /// Event name (wire name rules: 1 to 32 bytes of `[A-Za-z0-9_.-/]`).
+    pub name: EventName,
+    /// The channel's index in the signals' channel names (`Signals::channel_names`).
+    pub channel: usize,
+    /// Side.
+    pub dir: ThresholdDir,
+    /// Level, in the channel's unit.
+    pub level: f64,
+    /// Hysteresis of the clear (≥ 0).
+    pub hysteresis: f64,
+    /// Raised now.
+    pub active: bool,
+}
+
+/// What happened.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum EventKind {
+    /// A threshold was crossed.
+    Raised,
+    /// A threshold's channel came back.
+    Cleared,
+    /// A fault took effect.
+    Fault,
+    /// A fault request was refused (unknown target, bad value).
+    FaultRejected,
+}
+
+/// An event name stored inline (at most 32 bytes: no allocation per event).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct EventName {
+    bytes: [u8; 32],
+    len: u8,
+}
+
+impl EventName {
+    /// The name, cut to 32 bytes at a character boundary.
+    pub fn new(s: &str) -> Self {
+        let mut end = s.len().min(32);
+        while !s.is_char_boundary(end) {
+            end -= 1;
+        }
+        let mut bytes = [0; 32];
+        bytes[..end].copy_from_slice(&s.as_bytes()[..end]);
+        EventName { bytes, len: end as u8 }
+    }
+    /// As text.
+    pub fn as_str(&self) -> &str {
+        std::str::from_utf8(&self.bytes[..self.len as usize]).unwrap_or("")
+    }
+}
+
+/// One event of a step.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Event {
+    /// What.
+    pub kind: EventKind,
+    /// The threshold's or fault's name.
+    pub name: EventName,
+    /// Simulation time at the end of the step (s).
+    pub time: f64,
+    /// The channel's value (a tension that broke a rope; 0 when there is none).
+    pub value: f64,
+    /// The threshold's level (a fault's limit; 0 when there is none).
+    pub level: f64,
+}
