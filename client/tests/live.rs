@@ -366,6 +366,8 @@ fn record_over_iceoryx2_writes_every_channel() {
     send_all_four(&a);
     eprintln!("four sends over iceoryx2 took {:?}", t.elapsed());
     // Ctrl-C ends the recording; the file is finished properly.
+    // Frames after the fault (its event, the dropped-out readings) reach the recorder first.
+    std::thread::sleep(std::time::Duration::from_millis(500));
     rec.interrupt();
     let out = rec.wait().ok();
     assert!(out.stderr.contains("4 inputs"), "{}", out.stderr);
@@ -393,6 +395,8 @@ fn record_over_zenoh_sees_inputs_of_peers_connected_to_it() {
     let mut a = s.args();
     a.extend(["--connect", &rec_endpoint, "send"].map(String::from));
     send_all_four(&a);
+    // Frames after the fault (its event, the dropped-out readings) reach the recorder first.
+    std::thread::sleep(std::time::Duration::from_millis(500));
     rec.interrupt();
     let out = rec.wait().ok();
     check_recording(&path);
