@@ -100,16 +100,9 @@ impl Solver {
     /// - not converged but within `CROSSOVER_BELOW`: pivoting from its index set for the steps left;
     /// - else pivoting resumes from the index set it had before the switch.
     pub(super) fn interior_point_with_crossover(&mut self, variant: super::Variant, friction: bool) -> bool {
-        let m = self.ap.n();
-        self.ipm_state.clear();
-        self.ipm_state.extend_from_slice(&self.state);
-        resize(&mut self.ipm_lam, m);
-        self.ipm_lam.copy_from_slice(&self.lam);
-        let converged = self.interior_point();
-        if converged {
-            self.ipm_state.clear();
-            self.ipm_state.extend_from_slice(&self.state);
-            self.ipm_lam.copy_from_slice(&self.lam);
+        self.save_point();
+        if self.interior_point() {
+            self.save_point();
             self.ipm_at = self.stats.pivot_steps + CROSSOVER_STEPS;
             let mut exact = !self.stop_now() && self.bpp_loop(variant, friction, true);
             self.ipm_at = usize::MAX;
@@ -120,14 +113,7 @@ impl Solver {
                 exact = rr <= self.opts.tol_rel || res == 0.0;
             }
             if !exact {
-                self.lam.copy_from_slice(&self.ipm_lam);
-                self.state.copy_from_slice(&self.ipm_state);
-                for i in 0..m {
-                    self.tight[i] = self.state[i].is_tight();
-                }
-                self.update_bounds();
-                self.compute_w();
-                self.l_valid = false;
+                self.restore_point();
             }
             return true;
         }
@@ -136,15 +122,29 @@ impl Solver {
         }
         if self.ipm.best > CROSSOVER_BELOW {
             // Far from a solution: its index set says little; back to where the pivoting was.
-            self.state.copy_from_slice(&self.ipm_state);
-            self.lam.copy_from_slice(&self.ipm_lam);
-            for i in 0..m {
-                self.tight[i] = self.state[i].is_tight();
-            }
-            self.compute_w();
-            self.l_valid = false;
+            self.restore_point();
         }
         self.bpp_loop(variant, friction, true)
+    }
+
+    /// Keeps the index set and `λ` (`ipm_state`, `ipm_lam`) to come back to.
+    fn save_point(&mut self) {
+        self.ipm_state.clear();
+        self.ipm_state.extend_from_slice(&self.state);
+        self.ipm_lam.clear();
+        self.ipm_lam.extend_from_slice(&self.lam);
+    }
+
+    /// Back to the kept index set and `λ`, with their frozen bounds and `w`.
+    fn restore_point(&mut self) {
+        self.state.copy_from_slice(&self.ipm_state);
+        self.lam.copy_from_slice(&self.ipm_lam);
+        for (t, s) in self.tight.iter_mut().zip(&self.state) {
+            *t = s.is_tight();
+        }
+        self.update_bounds();
+        self.compute_w();
+        self.l_valid = false;
     }
 
     /// Runs the interior point method from scratch on the current (permuted) problem, each
