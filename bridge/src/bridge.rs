@@ -1,8 +1,11 @@
 //! The bridge loop. Two threads: the main loop waits for the newest frames from the server and
 //! publishes them to ROS (`/tf`, `/pivotsim/poses`, `/clock` per pose frame; `/tf_static` and
-//! `/pivotsim/markers` per scene; `/pivotsim/stats` on a timer), and the joy thread waits on the
-//! `/joy` subscription and forwards each valid message to the server at once.
+//! `/pivotsim/markers` per scene; `/pivotsim/signals`, the wrenches and
+//! `/pivotsim/contact_markers` per signals frame; `/rosout` per event; `/pivotsim/stats` on a
+//! timer), and the joy thread waits on the `/joy` subscription and forwards each valid message to
+//! the server at once.
 
+use std::collections::HashMap;
 use std::collections::hash_map::RandomState;
 use std::hash::BuildHasher;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
@@ -16,14 +19,14 @@ use ros2_client::dds::rustdds::mio1;
 use serde::Serialize;
 use tracing::{info, warn};
 
-use crate::convert::{self, BridgeHealth, JoyTranslator, SceneInfo};
+use crate::convert::{self, BridgeHealth, JoyTranslator, SceneInfo, SignalCounters, SignalLayout};
 use crate::ros_msgs::*;
 use crate::zenoh_link::{self, ZenohLink};
 use crate::{BridgeConfig, BridgeReport, dds, topics};
 
 /// A publisher that counts (and logs, rate-limited) its failures instead of waiting.
 struct Out<M: Serialize> {
-    name: &'static str,
+    name: String,
     publisher: Publisher<M>,
     failed: Arc<AtomicU64>,
 }
@@ -41,6 +44,13 @@ impl<M: Serialize> Out<M> {
             }
         }
     }
+}
+
+/// The wall clock now.
+fn wall_now() -> Time {
+    let ns =
+        std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).unwrap_or_default().as_nanos();
+    Time::from_nanos(ns.min(i64::MAX as u128) as i64)
 }
 
 fn random_source_id() -> u32 {
@@ -114,6 +124,10 @@ struct Outputs {
     markers: Out<MarkerArray>,
     stats: Out<DiagnosticArray>,
     clock: Out<Clock>,
+    signals: Out<Float64MultiArray>,
+    signal_names: Out<RosString>,
+    contact_markers: Out<MarkerArray>,
+    rosout: Out<Log>,
     /// Publish failures of all of them.
     failed: Arc<AtomicU64>,
 }
@@ -127,7 +141,7 @@ impl Outputs {
                 let qos = $qos;
                 let topic = dds::topic::<$t>(node, $name, &qos)?;
                 Out::<$t> {
-                    name: $name,
+                    name: $name.to_string(),
                     publisher: node
                         .create_publisher(&topic, Some(qos))
                         .map_err(|e| anyhow!("{}: {e:?}", $name))?,
@@ -142,7 +156,22 @@ impl Outputs {
             markers: out!(MarkerArray, topics::MARKERS, dds::qos::latched()),
             stats: out!(DiagnosticArray, topics::STATS, dds::qos::diagnostics()),
             clock: out!(Clock, topics::CLOCK, dds::qos::stream()),
+            signals: out!(Float64MultiArray, topics::SIGNALS, dds::qos::signals()),
+            signal_names: out!(RosString, topics::SIGNAL_NAMES, dds::qos::latched()),
+            contact_markers: out!(MarkerArray, topics::CONTACT_MARKERS, dds::qos::signals()),
+            rosout: out!(Log, topics::ROSOUT, dds::qos::rosout()),
             failed,
+        })
+    }
+
+    /// A force sensor's wrench publisher on `name` (created when the sensor first appears).
+    fn wrench(&self, node: &mut ros2_client::Node, name: &str) -> anyhow::Result<Out<WrenchStamped>> {
+        let qos = dds::qos::signals();
+        let topic = dds::topic::<WrenchStamped>(node, name, &qos)?;
+        Ok(Out {
+            name: name.to_string(),
+            publisher: node.create_publisher(&topic, Some(qos)).map_err(|e| anyhow!("{name}: {e:?}"))?,
+            failed: self.failed.clone(),
         })
     }
 }
@@ -175,6 +204,7 @@ struct Bridge<'a> {
     world: msgs::WorldName,
     link: Arc<ZenohLink>,
     out: Outputs,
+    node: ros2_client::Node,
     translator: Arc<Mutex<JoyTranslator>>,
     source_id: u32,
     scene: Option<SceneInfo>,
@@ -191,6 +221,18 @@ struct Bridge<'a> {
     next_markers: Instant,
     next_log: Option<Instant>,
     report: BridgeReport,
+    /// The last signals frame that decoded (`have_signals`), and the buffer the next one decodes
+    /// into.
+    signals: msgs::SignalsFrame,
+    have_signals: bool,
+    signals_scratch: msgs::SignalsFrame,
+    /// Sequence and simulation time of the last signals frame published.
+    signals_published: Option<(u64, u64)>,
+    /// The channel layout of the current signals frames and its wrench publishers by topic.
+    layout: Option<SignalLayout>,
+    wrench_outs: HashMap<String, Out<WrenchStamped>>,
+    array: Float64MultiArray,
+    counters: SignalCounters,
 }
 
 impl Bridge<'_> {
@@ -266,6 +308,131 @@ impl Bridge<'_> {
         }
     }
 
+    /// The stamp of a signals frame: its simulation time, or with `--stamp wall` the wall time
+    /// of the pose frame of the same step (the clock here when that frame is not the latest).
+    fn signals_stamp(&self, sequence: u64, sim_time: f64) -> Time {
+        match self.config.stamp {
+            crate::StampSource::Sim => Time::from_secs_f64(sim_time),
+            crate::StampSource::Wall if self.frame.sequence == sequence => {
+                crate::StampSource::Wall.stamp(sim_time, self.frame.wall_time_ns)
+            }
+            crate::StampSource::Wall => wall_now(),
+        }
+    }
+
+    /// New channel names (first frame, new scene): the wrench publishers of the new force
+    /// sensors (those no longer present are dropped; at most `MAX_WRENCH_TOPICS`), and the names
+    /// on `/pivotsim/signal_names`.
+    fn set_layout(&mut self, layout: SignalLayout) {
+        self.wrench_outs.retain(|topic, _| layout.wrenches.iter().any(|w| &w.topic == topic));
+        let mut refused = layout.wrenches_refused as u64;
+        for w in &layout.wrenches {
+            if !self.wrench_outs.contains_key(&w.topic) {
+                match self.out.wrench(&mut self.node, &w.topic) {
+                    Ok(o) => {
+                        self.wrench_outs.insert(w.topic.clone(), o);
+                    }
+                    Err(e) => {
+                        warn!("force sensor `{}`: no publisher: {e:#}", w.sensor);
+                        refused += 1;
+                    }
+                }
+            }
+        }
+        self.counters.wrench_topics = self.wrench_outs.len() as u64;
+        self.counters.wrench_sensors_refused = refused;
+        let topics: Vec<&str> = layout.wrenches.iter().map(|w| w.topic.as_str()).collect();
+        info!(
+            "signals: {} channels; wrenches on {topics:?}; {refused} force sensors refused",
+            self.signals.channels.len()
+        );
+        self.out.signal_names.publish(RosString { data: layout.names_text() });
+        self.layout = Some(layout);
+    }
+
+    /// A signals frame: `/pivotsim/signals`, a wrench per force sensor and the contact arrows. A
+    /// frame that does not decode is counted and dropped.
+    fn on_signals(&mut self, bytes: &[u8]) {
+        if let Err(e) = self.signals_scratch.decode_into(bytes) {
+            self.counters.signals_decode_failed += 1;
+            let n = self.counters.signals_decode_failed;
+            if n <= 10 || n.is_multiple_of(1000) {
+                warn!("signals frame: {e} ({n} undecodable so far)");
+            }
+            return;
+        }
+        std::mem::swap(&mut self.signals, &mut self.signals_scratch);
+        self.have_signals = true;
+        let (sequence, sim_time) = (self.signals.sequence, self.signals.sim_time);
+        // A paused server repeats its last frame: with simulation stamps nothing new to say.
+        if self.config.stamp == crate::StampSource::Sim
+            && self.signals_published == Some((sequence, sim_time.to_bits()))
+        {
+            return;
+        }
+        if !self.layout.as_ref().is_some_and(|l| l.matches(&self.signals)) {
+            self.set_layout(SignalLayout::new(&self.signals));
+        }
+        let stamp = self.signals_stamp(sequence, sim_time);
+        let world_frame = &self.config.world_frame;
+        convert::signals_array(&self.signals, &mut self.array);
+        self.out.signals.publish(self.array.clone());
+        if let Some(layout) = &self.layout {
+            for w in &layout.wrenches {
+                if let (Some(out), Some(m)) =
+                    (self.wrench_outs.get(&w.topic), convert::wrench(w, &self.signals, stamp, world_frame))
+                    && out.publish(m)
+                {
+                    self.report.wrenches_published += 1;
+                }
+            }
+        }
+        self.out.contact_markers.publish(convert::contact_markers(
+            &self.signals,
+            self.config.force_scale,
+            stamp,
+            world_frame,
+        ));
+        self.signals_published = Some((sequence, sim_time.to_bits()));
+    }
+
+    /// An events frame: each event as a `/rosout` line (and in the bridge's own log).
+    fn on_events(&mut self, bytes: &[u8]) {
+        let e = match msgs::EventsFrame::decode(bytes) {
+            Ok(e) => e,
+            Err(e) => {
+                self.counters.events_decode_failed += 1;
+                let n = self.counters.events_decode_failed;
+                if n <= 10 || n.is_multiple_of(1000) {
+                    warn!("events frame: {e} ({n} undecodable so far)");
+                }
+                return;
+            }
+        };
+        for r in &e.events {
+            let stamp = match self.config.stamp {
+                crate::StampSource::Sim => Time::from_secs_f64(r.time),
+                crate::StampSource::Wall => wall_now(),
+            };
+            let line = convert::event_log(r, stamp, &self.config.node_name);
+            info!("{}", line.msg);
+            if self.out.rosout.publish(line) {
+                self.counters.events_logged += 1;
+            }
+        }
+    }
+
+    fn signal_counters(&self) -> SignalCounters {
+        let i = &self.link.inbox;
+        SignalCounters {
+            signals_frames: i.signals_frames.load(Ordering::Relaxed),
+            signals_frames_skipped: i.signals_frames_skipped.load(Ordering::Relaxed),
+            events_frames: i.events_frames.load(Ordering::Relaxed),
+            events_frames_dropped: i.events_frames_dropped.load(Ordering::Relaxed),
+            ..self.counters
+        }
+    }
+
     fn health(&self) -> BridgeHealth {
         BridgeHealth {
             world: self.world.as_str().to_string(),
@@ -276,6 +443,7 @@ impl Bridge<'_> {
             ros_publish_failed: self.out.failed.load(Ordering::Relaxed),
             joy: self.translator.lock().map(|t| t.counters).unwrap_or_default(),
             source_id: self.source_id,
+            signals: self.signal_counters(),
         }
     }
 
@@ -292,16 +460,27 @@ impl Bridge<'_> {
                 (Some(s), crate::StampSource::Sim) => Time::from_secs_f64(s.sim_time),
                 _ => self.config.stamp.stamp(self.last_sim.max(0.0), self.frame.wall_time_ns),
             };
-            self.out.stats.publish(convert::diagnostics(self.solver.as_ref(), &self.health(), stamp));
+            let signals = self.have_signals.then_some(&self.signals);
+            self.out.stats.publish(convert::diagnostics(
+                self.solver.as_ref(),
+                signals,
+                &self.health(),
+                stamp,
+            ));
             self.next_stats = now + self.config.stats_period;
         }
         if let Some(t) = self.next_log.filter(|t| now >= *t) {
             let h = self.health();
             info!(
-                "pose frames {} ({} skipped), /tf {}, joy {} received / {} forwarded / {} rejected, {} ROS publish failures",
+                "pose frames {} ({} skipped), /tf {}, signals frames {} ({} skipped, {} undecodable), {} wrenches, {} events logged, joy {} received / {} forwarded / {} rejected, {} ROS publish failures",
                 h.pose_frames,
                 h.pose_frames_skipped,
                 self.report.tf_published,
+                h.signals.signals_frames,
+                h.signals.signals_frames_skipped,
+                h.signals.signals_decode_failed,
+                self.report.wrenches_published,
+                h.signals.events_logged,
                 h.joy.received,
                 h.joy.forwarded,
                 h.joy.rejected_total(),
@@ -331,6 +510,12 @@ impl Bridge<'_> {
         if let Some(bytes) = new.poses {
             self.on_poses(&bytes);
         }
+        if let Some(bytes) = new.signals {
+            self.on_signals(&bytes);
+        }
+        for bytes in new.events {
+            self.on_events(&bytes);
+        }
         self.on_timers(Instant::now());
     }
 }
@@ -359,6 +544,7 @@ pub fn run(config: &BridgeConfig, shutdown: Arc<AtomicBool>) -> anyhow::Result<B
         world,
         link,
         out,
+        node,
         translator,
         source_id,
         scene: None,
@@ -374,16 +560,26 @@ pub fn run(config: &BridgeConfig, shutdown: Arc<AtomicBool>) -> anyhow::Result<B
         next_markers: Instant::now() + config.markers_period,
         next_log: config.log_interval.map(|iv| Instant::now() + iv),
         report: BridgeReport::default(),
+        signals: msgs::SignalsFrame::default(),
+        have_signals: false,
+        signals_scratch: msgs::SignalsFrame::default(),
+        signals_published: None,
+        layout: None,
+        wrench_outs: HashMap::new(),
+        array: Float64MultiArray::default(),
+        counters: SignalCounters::default(),
     };
     while !shutdown.load(Ordering::Relaxed) && !joy.is_finished() {
         b.round();
     }
     shutdown.store(true, Ordering::Relaxed);
     let joy_result = joy.join().map_err(|_| anyhow!("joy thread panicked"))?;
+    let signals = b.signal_counters();
     let mut report = b.report;
     report.pose_frames = b.link.inbox.pose_frames.load(Ordering::Relaxed);
     report.joy = b.translator.lock().map(|t| t.counters).unwrap_or_default();
     report.ros_publish_failed = b.out.failed.load(Ordering::Relaxed);
+    report.signals = signals;
     info!("bridge stopped: {report:?}");
     joy_result.map(|()| report)
 }

@@ -417,6 +417,283 @@ impl JoyTranslator {
     }
 }
 
+/// Topic prefix of the per-sensor wrenches: `/pivotsim/signals/<sensor>`.
+pub const WRENCH_TOPIC_PREFIX: &str = "/pivotsim/signals/";
+
+/// At most this many wrench topics (publishers) exist at once; further force sensors are
+/// counted in the bridge status (`wrench_sensors_refused`) and stay in `/pivotsim/signals`.
+pub const MAX_WRENCH_TOPICS: usize = 64;
+
+/// A sensor name as one ROS topic-name token (ROS 2 name rules: `[A-Za-z0-9_]`, not starting
+/// with a digit, no repeated or trailing `_`): every other character (`.`, `-`, `/`) becomes `_`,
+/// runs of `_` collapse into one, leading and trailing `_` are dropped, a leading digit gets an
+/// `s` in front, and nothing left gives `sensor`. `hoist.rope-1` → `hoist_rope_1`, `2nd` → `s2nd`.
+pub fn topic_token(name: &str) -> String {
+    let mut out = String::with_capacity(name.len() + 1);
+    for c in name.chars() {
+        let c = if c.is_ascii_alphanumeric() { c } else { '_' };
+        if c == '_' && (out.is_empty() || out.ends_with('_')) {
+            continue;
+        }
+        out.push(c);
+    }
+    while out.ends_with('_') {
+        out.pop();
+    }
+    if out.is_empty() {
+        out.push_str("sensor");
+    } else if out.starts_with(|c: char| c.is_ascii_digit()) {
+        out.insert(0, 's');
+    }
+    out
+}
+
+/// What a force sensor's wrench is expressed in.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum WrenchKind {
+    /// `fx fy fz tx ty tz`: a joint sensor, the reaction on the joint's body A at its anchor, in
+    /// A's joint frame (x = the joint axis).
+    Joint,
+    /// `fx fy fz` without torques: a contact force sum, in the world frame.
+    ContactSum,
+}
+
+/// One force sensor of the signals frame and its wrench topic.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct WrenchSensor {
+    /// The sensor's name (the `{sensor}` of its channels).
+    pub sensor: String,
+    /// Topic: [`WRENCH_TOPIC_PREFIX`] + [`topic_token`] of the name (`_2`, `_3`, … appended when
+    /// two names sanitize alike).
+    pub topic: String,
+    /// Joint reaction or contact sum.
+    pub kind: WrenchKind,
+    /// Channel indices of `fx fy fz`.
+    pub force: [usize; 3],
+    /// Channel indices of `tx ty tz` (joint sensors).
+    pub torque: Option<[usize; 3]>,
+}
+
+impl WrenchSensor {
+    /// The `frame_id` of its wrench: `world_frame` for a contact sum; for a joint sensor
+    /// `joint_frame/<token>` — A's joint frame, which the scene description does not carry, so
+    /// it is not on `/tf`.
+    pub fn frame_id(&self, world_frame: &str) -> String {
+        match self.kind {
+            WrenchKind::ContactSum => world_frame.to_string(),
+            WrenchKind::Joint => format!("joint_frame/{}", &self.topic[WRENCH_TOPIC_PREFIX.len()..]),
+        }
+    }
+}
+
+/// The channel layout of a scene's signals frames: the channel names in order (the frames of one
+/// scene all have them), the force sensors found in them, and the names as one text.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct SignalLayout {
+    names: Vec<msgs::ActuatorName>,
+    /// Force sensors, in channel order, at most [`MAX_WRENCH_TOPICS`].
+    pub wrenches: Vec<WrenchSensor>,
+    /// Force sensors beyond [`MAX_WRENCH_TOPICS`] (no topic).
+    pub wrenches_refused: usize,
+}
+
+impl SignalLayout {
+    /// The layout of `frame`'s channels. A sensor is a force sensor when its channels include
+    /// `fx`, `fy` and `fz`: with `tx`, `ty` and `tz` too it is a joint sensor (joint frame),
+    /// without them a contact sum (world frame). Scalar channels (`tension`, a cylinder's
+    /// `force`, a drum's `torque`, cable tensions, the tipping margin, counts) are only in
+    /// `/pivotsim/signals`.
+    pub fn new(frame: &msgs::SignalsFrame) -> SignalLayout {
+        let names: Vec<msgs::ActuatorName> = frame.channels.iter().map(|c| c.name).collect();
+        // Sensors in order of first appearance, with the index of each of their channels.
+        let mut sensors: Vec<(&str, HashMap<&str, usize>)> = Vec::new();
+        for (i, n) in names.iter().enumerate() {
+            let Some((sensor, channel)) = n.as_str().rsplit_once('/') else { continue };
+            match sensors.iter_mut().find(|(s, _)| *s == sensor) {
+                Some((_, m)) => {
+                    m.entry(channel).or_insert(i);
+                }
+                None => sensors.push((sensor, HashMap::from([(channel, i)]))),
+            }
+        }
+        let mut layout = SignalLayout::default();
+        let mut taken: Vec<String> = Vec::new();
+        for (sensor, ch) in &sensors {
+            let three = |a, b, c| Some([*ch.get(a)?, *ch.get(b)?, *ch.get(c)?]);
+            let Some(force) = three("fx", "fy", "fz") else { continue };
+            if layout.wrenches.len() == MAX_WRENCH_TOPICS {
+                layout.wrenches_refused += 1;
+                continue;
+            }
+            let torque = three("tx", "ty", "tz");
+            let base = topic_token(sensor);
+            let mut token = base.clone();
+            let mut k = 1;
+            while taken.contains(&token) {
+                k += 1;
+                token = format!("{base}_{k}");
+            }
+            taken.push(token.clone());
+            layout.wrenches.push(WrenchSensor {
+                sensor: sensor.to_string(),
+                topic: format!("{WRENCH_TOPIC_PREFIX}{token}"),
+                kind: if torque.is_some() { WrenchKind::Joint } else { WrenchKind::ContactSum },
+                force,
+                torque,
+            });
+        }
+        layout.names = names;
+        layout
+    }
+
+    /// Whether `frame` has exactly these channels (same names, same order).
+    pub fn matches(&self, frame: &msgs::SignalsFrame) -> bool {
+        self.names.len() == frame.channels.len()
+            && self.names.iter().zip(&frame.channels).all(|(n, c)| *n == c.name)
+    }
+
+    /// The channel names, one per line, line `i` naming `data[i]` of `/pivotsim/signals`
+    /// (published latched on `/pivotsim/signal_names`).
+    pub fn names_text(&self) -> String {
+        let mut t = String::new();
+        for n in &self.names {
+            t.push_str(n.as_str());
+            t.push('\n');
+        }
+        t
+    }
+}
+
+/// The wrench of a force sensor in `frame` (N, N m; the torque is 0 for a contact sum), or `None`
+/// while one of its channels drops out (no reading) or the frame is not of the layout's scene.
+pub fn wrench(
+    sensor: &WrenchSensor,
+    frame: &msgs::SignalsFrame,
+    stamp: Time,
+    world_frame: &str,
+) -> Option<WrenchStamped> {
+    let read = |i: [usize; 3]| -> Option<Vector3> {
+        let c = [frame.channels.get(i[0])?, frame.channels.get(i[1])?, frame.channels.get(i[2])?];
+        if c.iter().any(|c| c.dropout) {
+            return None;
+        }
+        Some(Vector3 { x: c[0].value, y: c[1].value, z: c[2].value })
+    };
+    let force = read(sensor.force)?;
+    let torque = match sensor.torque {
+        Some(t) => read(t)?,
+        None => Vector3::default(),
+    };
+    Some(WrenchStamped {
+        header: Header { stamp, frame_id: sensor.frame_id(world_frame) },
+        wrench: Wrench { force, torque },
+    })
+}
+
+/// `/pivotsim/signals`: every channel's value in channel order (`data[i]` is line `i` of
+/// `/pivotsim/signal_names`), NaN while a channel drops out (a gap in a plot); one dimension
+/// labelled `channels`. Reuses `out`'s vectors.
+pub fn signals_array(frame: &msgs::SignalsFrame, out: &mut Float64MultiArray) {
+    let n = frame.channels.len() as u32;
+    out.layout.data_offset = 0;
+    if out.layout.dim.len() == 1 && out.layout.dim[0].label == "channels" {
+        out.layout.dim[0].size = n;
+        out.layout.dim[0].stride = n;
+    } else {
+        out.layout.dim.clear();
+        out.layout.dim.push(MultiArrayDimension { label: "channels".into(), size: n, stride: n });
+    }
+    out.data.clear();
+    out.data.extend(frame.channels.iter().map(|c| if c.dropout { f64::NAN } else { c.value }));
+}
+
+/// Colour of a contact arrow: stick green, slip orange, open grey (open contacts are not drawn).
+pub fn contact_color(state: msgs::ContactCode) -> ColorRGBA {
+    match state {
+        msgs::ContactCode::Stick => ColorRGBA { r: 0.1, g: 0.8, b: 0.1, a: 1.0 },
+        msgs::ContactCode::Slip => ColorRGBA { r: 1.0, g: 0.45, b: 0.0, a: 1.0 },
+        msgs::ContactCode::Open => ColorRGBA { r: 0.5, g: 0.5, b: 0.5, a: 1.0 },
+    }
+}
+
+/// Namespace of the contact arrows on `/pivotsim/contact_markers`.
+pub const CONTACTS_NS: &str = "contacts";
+
+/// The contact force of a record: the force on body B, `normal_force · normal + friction` (N,
+/// world frame; A receives the opposite).
+pub fn contact_force(c: &msgs::ContactRecord) -> [f64; 3] {
+    std::array::from_fn(|i| c.normal_force * c.normal[i] + c.friction[i])
+}
+
+/// `/pivotsim/contact_markers`: a `DELETEALL` of namespace [`CONTACTS_NS`] (so that contacts that
+/// vanished disappear), then one `ARROW` per pressed contact (stick or slip) in `world_frame`:
+/// from the contact point to the point + force on B · `metres_per_newton`, shaft 1 cm, head 2 cm
+/// wide, coloured by state ([`contact_color`]), id = the record's index. Open contacts and
+/// forces under 1e-9 N are left out.
+pub fn contact_markers(
+    frame: &msgs::SignalsFrame,
+    metres_per_newton: f64,
+    stamp: Time,
+    world_frame: &str,
+) -> MarkerArray {
+    let header = Header { stamp, frame_id: world_frame.to_string() };
+    let mut markers = Vec::with_capacity(frame.contacts.len() + 1);
+    markers.push(Marker {
+        header: header.clone(),
+        ns: CONTACTS_NS.into(),
+        action: Marker::DELETEALL,
+        ..Marker::default()
+    });
+    for (i, c) in frame.contacts.iter().enumerate() {
+        let f = contact_force(c);
+        let n = dot(f, f).sqrt();
+        if c.state == msgs::ContactCode::Open || !(n > 1e-9 && n.is_finite()) {
+            continue;
+        }
+        let tip = std::array::from_fn(|k| c.point[k] + f[k] * metres_per_newton);
+        markers.push(Marker {
+            header: header.clone(),
+            ns: CONTACTS_NS.into(),
+            id: i as i32,
+            type_: Marker::ARROW,
+            action: Marker::ADD,
+            scale: Vector3 { x: 0.01, y: 0.02, z: 0.0 },
+            color: contact_color(c.state),
+            points: vec![Point::from_array(c.point), Point::from_array(tip)],
+            ..Marker::default()
+        });
+    }
+    MarkerArray { markers }
+}
+
+/// The `/rosout` level of an event: a threshold raised, a fault or a refused fault WARN, a
+/// threshold cleared INFO.
+pub fn event_level(kind: msgs::EventCode) -> u8 {
+    match kind {
+        msgs::EventCode::Cleared => Log::INFO,
+        msgs::EventCode::Raised | msgs::EventCode::Fault | msgs::EventCode::FaultRejected => Log::WARN,
+    }
+}
+
+/// One event as a `/rosout` line of logger `logger`: `pivotsim event <name> <kind> at t = <time> s:
+/// value <value>, level <level>`, stamped `stamp`.
+pub fn event_log(e: &msgs::EventRecord, stamp: Time, logger: &str) -> Log {
+    Log {
+        stamp,
+        level: event_level(e.kind),
+        name: logger.to_string(),
+        msg: format!(
+            "pivotsim event {} {} at t = {:.3} s: value {}, level {}",
+            e.name.as_str(),
+            e.kind.name(),
+            e.time,
+            e.value,
+            e.level
+        ),
+        ..Log::default()
+    }
+}
+
 fn kv(key: impl Into<String>, value: impl ToString) -> KeyValue {
     KeyValue { key: key.into(), value: value.to_string() }
 }
@@ -425,6 +702,8 @@ fn kv(key: impl Into<String>, value: impl ToString) -> KeyValue {
 pub const DIAG_SOLVER: &str = "pivotsim: solver";
 /// Name of the server's input status in `/pivotsim/stats`.
 pub const DIAG_INPUTS: &str = "pivotsim: inputs";
+/// Name of the signals status in `/pivotsim/stats`: every channel `{sensor}/{channel}` → value.
+pub const DIAG_SIGNALS: &str = "pivotsim: signals";
 /// Name of the bridge's own status in `/pivotsim/stats`.
 pub const DIAG_BRIDGE: &str = "pivotsim-ros2-bridge";
 
@@ -447,11 +726,41 @@ pub struct BridgeHealth {
     pub joy: JoyCounters,
     /// Joystick source id of the bridge.
     pub source_id: u32,
+    /// Signals and events counters.
+    pub signals: SignalCounters,
+}
+
+/// Counters of the signals and events path (bridge side).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct SignalCounters {
+    /// Signals frames received over Zenoh.
+    pub signals_frames: u64,
+    /// Signals frames replaced before the ROS side took them (latest wins).
+    pub signals_frames_skipped: u64,
+    /// Signals frames that did not decode (counted, dropped).
+    pub signals_decode_failed: u64,
+    /// Events frames received over Zenoh.
+    pub events_frames: u64,
+    /// Events frames dropped because the bridge's queue of them was full.
+    pub events_frames_dropped: u64,
+    /// Events frames that did not decode.
+    pub events_decode_failed: u64,
+    /// Events published on `/rosout`.
+    pub events_logged: u64,
+    /// Wrench topics (one per force sensor) that exist.
+    pub wrench_topics: u64,
+    /// Force sensors without a topic (beyond [`MAX_WRENCH_TOPICS`], or whose publisher failed).
+    pub wrench_sensors_refused: u64,
 }
 
 /// `/pivotsim/stats`: the server's solver and input statistics (from its latest stats frame, if
-/// any) and the bridge's own counters.
-pub fn diagnostics(stats: Option<&msgs::SolverStats>, bridge: &BridgeHealth, stamp: Time) -> DiagnosticArray {
+/// any), its sensor channels (from its latest signals frame, if any) and the bridge's own counters.
+pub fn diagnostics(
+    stats: Option<&msgs::SolverStats>,
+    signals: Option<&msgs::SignalsFrame>,
+    bridge: &BridgeHealth,
+    stamp: Time,
+) -> DiagnosticArray {
     let mut status = Vec::new();
     let hw = format!("pivotsim/{}", bridge.world);
     if let Some(s) = stats {
@@ -495,6 +804,30 @@ pub fn diagnostics(stats: Option<&msgs::SolverStats>, bridge: &BridgeHealth, sta
             values,
         });
     }
+    if let Some(f) = signals {
+        let dropouts = f.channels.iter().filter(|c| c.dropout).count();
+        let mut values = vec![kv("sequence", f.sequence), kv("sim_time_s", f.sim_time)];
+        values.extend(
+            f.channels
+                .iter()
+                .map(|c| kv(c.name.as_str(), if c.dropout { "dropout".into() } else { c.value.to_string() })),
+        );
+        values.push(kv("contacts", f.contacts.len()));
+        values.push(kv("events_total", f.events_total));
+        values.push(kv("faults_applied", f.faults_applied));
+        values.push(kv("faults_rejected", f.faults_rejected));
+        status.push(DiagnosticStatus {
+            level: if dropouts > 0 { DiagnosticStatus::WARN } else { DiagnosticStatus::OK },
+            name: DIAG_SIGNALS.into(),
+            message: if dropouts > 0 {
+                format!("{} channels, {dropouts} dropped out", f.channels.len())
+            } else {
+                format!("{} channels, {} contacts", f.channels.len(), f.contacts.len())
+            },
+            hardware_id: hw.clone(),
+            values,
+        });
+    }
     let j = &bridge.joy;
     let stale = bridge.server_silent_s.is_none_or(|s| s > 1.0);
     let mut values = vec![
@@ -516,6 +849,18 @@ pub fn diagnostics(stats: Option<&msgs::SolverStats>, bridge: &BridgeHealth, sta
     for r in msgs::RejectReason::ALL {
         values.push(kv(format!("joy_rejected.{}", r.name()), j.rejected_for(*r)));
     }
+    let g = &bridge.signals;
+    values.extend([
+        kv("signals_frames", g.signals_frames),
+        kv("signals_frames_skipped", g.signals_frames_skipped),
+        kv("signals_decode_failed", g.signals_decode_failed),
+        kv("events_frames", g.events_frames),
+        kv("events_frames_dropped", g.events_frames_dropped),
+        kv("events_decode_failed", g.events_decode_failed),
+        kv("events_logged", g.events_logged),
+        kv("wrench_topics", g.wrench_topics),
+        kv("wrench_sensors_refused", g.wrench_sensors_refused),
+    ]);
     status.push(DiagnosticStatus {
         level: if stale { DiagnosticStatus::STALE } else { DiagnosticStatus::OK },
         name: DIAG_BRIDGE.into(),

@@ -76,6 +76,25 @@ pub mod qos {
             .history(History::KeepLast { depth: 1 })
     }
 
+    /// Signals, wrenches and contact arrows (per signals frame, at the step rate): reliable,
+    /// volatile, keep the last 10 (a contact array can be large), never waiting.
+    pub fn signals() -> QosProfile {
+        QosProfile::publisher_default()
+            .reliability_reliable(WhenFull::Fail)
+            .durability(Durability::Volatile)
+            .history(History::KeepLast { depth: 10 })
+    }
+
+    /// `/rosout` (the events): reliable, transient-local (as ROS 2's own rosout publishers, so
+    /// both volatile and transient-local subscribers such as rqt_console match), keep the last
+    /// 100, never waiting.
+    pub fn rosout() -> QosProfile {
+        QosProfile::publisher_default()
+            .reliability_reliable(WhenFull::Fail)
+            .durability(Durability::TransientLocal)
+            .history(History::KeepLast { depth: 100 })
+    }
+
     /// Diagnostics: reliable, volatile, keep the last 10, never waiting.
     pub fn diagnostics() -> QosProfile {
         QosProfile::publisher_default()

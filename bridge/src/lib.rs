@@ -2,9 +2,13 @@
 //! build or run it (DDS in pure Rust: `ros2-client` over RustDDS).
 //!
 //! The bridge is a separate process and a Zenoh client of the server: it subscribes to
-//! `pivotsim/<world>/poses` and `…/stats`, queries `…/scene` for body names and shapes, and
-//! publishes `/tf`, `/tf_static`, `/pivotsim/poses`, `/pivotsim/markers`, `/pivotsim/stats` and
-//! `/clock`; it subscribes to `/joy` and puts each valid `sensor_msgs/Joy` as a joystick frame of its
+//! `pivotsim/<world>/poses`, `…/stats`, `…/signals` and `…/events`, queries `…/scene` for body
+//! names and shapes, and publishes `/tf`, `/tf_static`, `/pivotsim/poses`, `/pivotsim/markers`,
+//! `/pivotsim/stats` and `/clock`; the server's operator signals as a
+//! `geometry_msgs/WrenchStamped` per force sensor (`/pivotsim/signals/<sensor>`), every channel
+//! in one `std_msgs/Float64MultiArray` (`/pivotsim/signals`, names on `/pivotsim/signal_names`),
+//! the contact states as coloured arrows (`/pivotsim/contact_markers`) and each event as a line on
+//! `/rosout`; it subscribes to `/joy` and puts each valid `sensor_msgs/Joy` as a joystick frame of its
 //! own source on `pivotsim/<world>/cmd/joystick`, where the server applies the scene's joystick
 //! mapping, its validation, its rejection counters and its deadman. The step loop cannot be
 //! stalled by ROS: the server only ever publishes to Zenoh with congestion control *drop*, and
@@ -13,7 +17,7 @@
 //! | module | concept |
 //! |---|---|
 //! | [`ros_msgs`] | the ROS message types (serde structs in `.msg` field order) |
-//! | [`convert`] | frames → ROS messages, `Joy` → joystick frames, diagnostics |
+//! | [`convert`] | frames → ROS messages (poses, shapes, wrenches, signal arrays, contact arrows, event log lines), `Joy` → joystick frames, diagnostics |
 //! | [`zenoh_link`] | the Zenoh client: latest frames, scene queries, joystick puts |
 //! | [`dds`] | DDS participant (domain, interfaces) and the topics' QoS (feature `ros2`) |
 //! | `bridge` | the loop: [`run`] (feature `ros2`) |
@@ -53,6 +57,19 @@ pub mod topics {
     pub const CLOCK: &str = "/clock";
     /// Operator input (default; `--joy-topic`).
     pub const JOY: &str = "/joy";
+    /// Every signal channel's value, in channel order.
+    pub const SIGNALS: &str = "/pivotsim/signals";
+    /// The channel names of `SIGNALS`, one per line (latched).
+    pub const SIGNAL_NAMES: &str = "/pivotsim/signal_names";
+    /// Contact states as arrows.
+    pub const CONTACT_MARKERS: &str = "/pivotsim/contact_markers";
+    /// Events as log lines.
+    pub const ROSOUT: &str = "/rosout";
+    /// The wrench topic of a force sensor named `sensor` (sanitized: [`crate::convert::topic_token`];
+    /// the bridge adds `_2`, `_3`, … when two names sanitize alike).
+    pub fn wrench(sensor: &str) -> String {
+        format!("{}{}", crate::convert::WRENCH_TOPIC_PREFIX, crate::convert::topic_token(sensor))
+    }
 }
 
 /// How the bridge runs.
@@ -85,6 +102,8 @@ pub struct BridgeConfig {
     pub source_id: Option<u32>,
     /// Log the counters every interval (`None`: never).
     pub log_interval: Option<Duration>,
+    /// Length of the contact arrows per newton of contact force (m/N).
+    pub force_scale: f64,
 }
 
 impl Default for BridgeConfig {
@@ -103,6 +122,7 @@ impl Default for BridgeConfig {
             markers_period: Duration::from_secs(1),
             source_id: None,
             log_interval: Some(Duration::from_secs(10)),
+            force_scale: 0.001,
         }
     }
 }
@@ -118,4 +138,8 @@ pub struct BridgeReport {
     pub joy: convert::JoyCounters,
     /// Failed ROS publishes.
     pub ros_publish_failed: u64,
+    /// The signals and events counters.
+    pub signals: convert::SignalCounters,
+    /// `WrenchStamped` messages published.
+    pub wrenches_published: u64,
 }

@@ -17,7 +17,8 @@ enum Stamp {
 }
 
 /// Bridge a pivotsim world to ROS 2: /tf, /tf_static, /pivotsim/poses, /pivotsim/markers,
-/// /pivotsim/stats and /clock out, /joy in. No ROS installation needed.
+/// /pivotsim/stats, /clock, the signals (/pivotsim/signals, /pivotsim/signals/<sensor> wrenches,
+/// /pivotsim/contact_markers) and events (/rosout) out, /joy in. No ROS installation needed.
 #[derive(Debug, Parser)]
 #[command(version, about)]
 struct Cli {
@@ -55,6 +56,10 @@ struct Cli {
     /// Joystick source id of the forwarded frames (default: random).
     #[arg(long, allow_negative_numbers = true)]
     source_id: Option<u32>,
+    /// Length of the contact-force arrows on /pivotsim/contact_markers per newton (m/N), 1e-9 to
+    /// 1000 (default 0.001: 1 m per kN).
+    #[arg(long, allow_negative_numbers = true, default_value_t = 0.001, value_parser = force_scale)]
+    force_scale: f64,
     /// Log the counters every this many seconds (0: never; else 0.001 to 86400).
     #[arg(long, allow_negative_numbers = true, default_value_t = 10.0, value_parser = log_interval)]
     log_interval: f64,
@@ -64,6 +69,12 @@ struct Cli {
 fn stats_rate(s: &str) -> Result<f64, String> {
     let v: f64 = s.parse().map_err(|e| format!("{e}"))?;
     if (0.01..=1000.0).contains(&v) { Ok(v) } else { Err(format!("{v} Hz is not from 0.01 to 1000 Hz")) }
+}
+
+/// `--force-scale`: a finite scale from 1e-9 to 1000 m/N.
+fn force_scale(s: &str) -> Result<f64, String> {
+    let v: f64 = s.parse().map_err(|e| format!("{e}"))?;
+    if (1e-9..=1000.0).contains(&v) { Ok(v) } else { Err(format!("{v} m/N is not from 1e-9 to 1000 m/N")) }
 }
 
 /// `--log-interval`: 0 (never) or a finite number of seconds up to a day.
@@ -114,6 +125,7 @@ fn main() -> ExitCode {
         stats_period: Duration::from_secs_f64(1.0 / cli.stats_rate),
         source_id: cli.source_id,
         log_interval: (cli.log_interval > 0.0).then(|| Duration::from_secs_f64(cli.log_interval)),
+        force_scale: cli.force_scale,
         ..Default::default()
     };
     run(config)

@@ -348,6 +348,8 @@ pub struct Marker {
 }
 
 impl Marker {
+    /// Type: arrow (with two `points`: from the first to the second).
+    pub const ARROW: i32 = 0;
     /// Type: box.
     pub const CUBE: i32 = 1;
     /// Type: sphere.
@@ -374,6 +376,96 @@ pub struct MarkerArray {
 }
 ros_type!(MarkerArray, "visualization_msgs", "MarkerArray");
 
+/// `geometry_msgs/Wrench`.
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
+pub struct Wrench {
+    /// Force (N).
+    pub force: Vector3,
+    /// Torque (N m).
+    pub torque: Vector3,
+}
+
+/// `geometry_msgs/WrenchStamped`.
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+pub struct WrenchStamped {
+    /// Stamp and the frame the wrench is expressed in.
+    pub header: Header,
+    /// Force and torque.
+    pub wrench: Wrench,
+}
+ros_type!(WrenchStamped, "geometry_msgs", "WrenchStamped");
+
+/// `std_msgs/MultiArrayDimension`.
+#[derive(Debug, Clone, PartialEq, Eq, Default, Serialize, Deserialize)]
+pub struct MultiArrayDimension {
+    /// Label of the dimension.
+    pub label: String,
+    /// Elements along it.
+    pub size: u32,
+    /// Stride (elements) of the dimension.
+    pub stride: u32,
+}
+
+/// `std_msgs/MultiArrayLayout`.
+#[derive(Debug, Clone, PartialEq, Eq, Default, Serialize, Deserialize)]
+pub struct MultiArrayLayout {
+    /// Dimensions, outermost first.
+    pub dim: Vec<MultiArrayDimension>,
+    /// Padding elements at the front of `data`.
+    pub data_offset: u32,
+}
+
+/// `std_msgs/Float64MultiArray`.
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+pub struct Float64MultiArray {
+    /// Layout.
+    pub layout: MultiArrayLayout,
+    /// Values.
+    pub data: Vec<f64>,
+}
+ros_type!(Float64MultiArray, "std_msgs", "Float64MultiArray");
+
+/// `std_msgs/String`.
+#[derive(Debug, Clone, PartialEq, Eq, Default, Serialize, Deserialize)]
+pub struct RosString {
+    /// Text.
+    pub data: String,
+}
+ros_type!(RosString, "std_msgs", "String");
+
+/// `rcl_interfaces/Log` (what `/rosout` carries).
+#[derive(Debug, Clone, PartialEq, Eq, Default, Serialize, Deserialize)]
+pub struct Log {
+    /// When.
+    pub stamp: Time,
+    /// [`Log::DEBUG`] … [`Log::FATAL`].
+    pub level: u8,
+    /// Logger name.
+    pub name: String,
+    /// The line.
+    pub msg: String,
+    /// Source file (empty).
+    pub file: String,
+    /// Function (empty).
+    pub function: String,
+    /// Line (0).
+    pub line: u32,
+}
+ros_type!(Log, "rcl_interfaces", "Log");
+
+impl Log {
+    /// Level DEBUG.
+    pub const DEBUG: u8 = 10;
+    /// Level INFO.
+    pub const INFO: u8 = 20;
+    /// Level WARN.
+    pub const WARN: u8 = 30;
+    /// Level ERROR.
+    pub const ERROR: u8 = 40;
+    /// Level FATAL.
+    pub const FATAL: u8 = 50;
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -383,6 +475,10 @@ mod tests {
         assert_eq!(TFMessage::dds_type_name(), "tf2_msgs::msg::dds_::TFMessage_");
         assert_eq!(MarkerArray::dds_type_name(), "visualization_msgs::msg::dds_::MarkerArray_");
         assert_eq!(Clock::dds_type_name(), "rosgraph_msgs::msg::dds_::Clock_");
+        assert_eq!(WrenchStamped::dds_type_name(), "geometry_msgs::msg::dds_::WrenchStamped_");
+        assert_eq!(Float64MultiArray::dds_type_name(), "std_msgs::msg::dds_::Float64MultiArray_");
+        assert_eq!(RosString::dds_type_name(), "std_msgs::msg::dds_::String_");
+        assert_eq!(Log::dds_type_name(), "rcl_interfaces::msg::dds_::Log_");
     }
 
     #[test]

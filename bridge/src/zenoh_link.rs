@@ -1,7 +1,10 @@
 //! The bridge's Zenoh client: a peer session that connects to the server (no listening, no
-//! multicast scouting), the latest pose and stats frames (latest wins: a slow ROS side skips
-//! frames, it never queues them), non-blocking scene queries, and the joystick publisher.
+//! multicast scouting), the latest pose, stats and signals frames (latest wins: a slow ROS side
+//! skips frames, it never queues them), the events frames (rare, each one matters: a bounded
+//! queue of [`EVENTS_QUEUE`], overflow counted), non-blocking scene queries, and the joystick
+//! publisher.
 
+use std::collections::VecDeque;
 use std::path::Path;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::{Arc, Condvar, Mutex};
@@ -24,6 +27,9 @@ pub fn config(connect: &[String], file: Option<&Path>) -> anyhow::Result<zenoh::
     Ok(e.config()?)
 }
 
+/// At most this many events frames wait for the bridge loop; more are dropped and counted.
+pub const EVENTS_QUEUE: usize = 64;
+
 /// The newest frames from the server.
 #[derive(Debug, Default)]
 pub struct Latest {
@@ -33,6 +39,10 @@ pub struct Latest {
     pub stats: Option<Vec<u8>>,
     /// Newest scene description reply not yet taken.
     pub scene: Option<Vec<u8>>,
+    /// Newest signals frame not yet taken.
+    pub signals: Option<Vec<u8>>,
+    /// Events frames not yet taken, oldest first (at most [`EVENTS_QUEUE`]).
+    pub events: VecDeque<Vec<u8>>,
     /// When the last frame arrived.
     pub last_frame: Option<Instant>,
 }
@@ -46,6 +56,14 @@ pub struct Inbox {
     pub pose_frames: AtomicU64,
     /// Pose frames replaced before they were taken.
     pub pose_frames_skipped: AtomicU64,
+    /// Signals frames received.
+    pub signals_frames: AtomicU64,
+    /// Signals frames replaced before they were taken.
+    pub signals_frames_skipped: AtomicU64,
+    /// Events frames received.
+    pub events_frames: AtomicU64,
+    /// Events frames dropped on a full queue.
+    pub events_frames_dropped: AtomicU64,
 }
 
 impl Inbox {
@@ -59,7 +77,12 @@ impl Inbox {
     /// Waits up to `timeout` for something new, then takes everything new.
     pub fn take(&self, timeout: Duration) -> Latest {
         let Ok(mut l) = self.latest.lock() else { return Latest::default() };
-        if l.poses.is_none() && l.stats.is_none() && l.scene.is_none() {
+        if l.poses.is_none()
+            && l.stats.is_none()
+            && l.scene.is_none()
+            && l.signals.is_none()
+            && l.events.is_empty()
+        {
             l = match self.ready.wait_timeout(l, timeout) {
                 Ok((l, _)) => l,
                 Err(_) => return Latest::default(),
@@ -69,6 +92,8 @@ impl Inbox {
             poses: l.poses.take(),
             stats: l.stats.take(),
             scene: l.scene.take(),
+            signals: l.signals.take(),
+            events: std::mem::take(&mut l.events),
             last_frame: l.last_frame,
         }
     }
@@ -82,6 +107,8 @@ pub struct ZenohLink {
     pub inbox: Arc<Inbox>,
     _poses: Subscriber<()>,
     _stats: Subscriber<()>,
+    _signals: Subscriber<()>,
+    _events: Subscriber<()>,
     joystick: Publisher<'static>,
 }
 
@@ -92,7 +119,7 @@ impl std::fmt::Debug for ZenohLink {
 }
 
 impl ZenohLink {
-    /// Opens the session and subscribes to `world`'s poses and stats.
+    /// Opens the session and subscribes to `world`'s poses, stats, signals and events.
     pub fn open(config: zenoh::Config, world: msgs::WorldName) -> anyhow::Result<ZenohLink> {
         let err = |e: zenoh::Error| anyhow!("zenoh: {e}");
         let session = zenoh::open(config).wait().map_err(err)?;
@@ -125,13 +152,55 @@ impl ZenohLink {
             })
             .wait()
             .map_err(err)?;
+        let i = inbox.clone();
+        let signals = session
+            .declare_subscriber(world.key(msgs::Topic::Signals))
+            .callback(move |s| {
+                let bytes = s.payload().to_bytes().into_owned();
+                i.signals_frames.fetch_add(1, Ordering::Relaxed);
+                let ii = i.clone();
+                i.put(|l| {
+                    if l.signals.replace(bytes).is_some() {
+                        ii.signals_frames_skipped.fetch_add(1, Ordering::Relaxed);
+                    }
+                    l.last_frame = Some(Instant::now());
+                });
+            })
+            .wait()
+            .map_err(err)?;
+        let i = inbox.clone();
+        let events = session
+            .declare_subscriber(world.key(msgs::Topic::Events))
+            .callback(move |s| {
+                let bytes = s.payload().to_bytes().into_owned();
+                i.events_frames.fetch_add(1, Ordering::Relaxed);
+                let ii = i.clone();
+                i.put(|l| {
+                    if l.events.len() < EVENTS_QUEUE {
+                        l.events.push_back(bytes);
+                    } else {
+                        ii.events_frames_dropped.fetch_add(1, Ordering::Relaxed);
+                    }
+                });
+            })
+            .wait()
+            .map_err(err)?;
         let joystick = session
             .declare_publisher(world.key(msgs::Topic::Joystick))
             .congestion_control(CongestionControl::Drop)
             .express(true)
             .wait()
             .map_err(err)?;
-        Ok(ZenohLink { session, world, inbox, _poses: poses, _stats: stats, joystick })
+        Ok(ZenohLink {
+            session,
+            world,
+            inbox,
+            _poses: poses,
+            _stats: stats,
+            _signals: signals,
+            _events: events,
+            joystick,
+        })
     }
 
     /// Asks the server for its scene description; the reply lands in the inbox (non-blocking).
