@@ -983,4 +983,263 @@ mod tests {
         assert_eq!(m[4].points.len(), 2 * 2 * 3);
         assert_eq!(m[5].mesh_resource, "file:///m.stl");
     }
+
+    fn channel(name: &str, value: f64) -> msgs::SignalChannel {
+        msgs::SignalChannel { name: msgs::ActuatorName::new(name).unwrap(), dropout: false, value }
+    }
+
+    /// A joint sensor `hoist.rope`, a contact sum `support`, a scalar tension and a cylinder
+    /// force, with one stick, one slip and one open contact.
+    fn signals_frame() -> msgs::SignalsFrame {
+        let mut channels = Vec::new();
+        for (c, v) in [("fx", 1.0), ("fy", -2.0), ("fz", 49.05), ("tx", 0.5), ("ty", 0.25), ("tz", -0.125)] {
+            channels.push(channel(&format!("hoist.rope/{c}"), v));
+        }
+        for (c, v) in
+            [("fx", 3.0), ("fy", 0.0), ("fz", 98.1), ("normal", 98.1), ("friction", 3.0), ("points", 4.0)]
+        {
+            channels.push(channel(&format!("support/{c}"), v));
+        }
+        channels.push(channel("rope/tension", 49.1));
+        channels.push(channel("lift/force", 1200.0));
+        let contact = |state, point: [f64; 3], normal_force, friction: [f64; 3]| msgs::ContactRecord {
+            body_a: 1,
+            body_b: 2,
+            state,
+            point,
+            normal_force,
+            friction_force: friction.iter().map(|x| x * x).sum::<f64>().sqrt(),
+            normal: [0.0, 0.0, 1.0],
+            friction,
+        };
+        msgs::SignalsFrame {
+            sequence: 9,
+            sim_time: 1.5,
+            channels,
+            contacts: vec![
+                contact(msgs::ContactCode::Stick, [1.0, 2.0, 0.5], 100.0, [0.0, 0.0, 0.0]),
+                contact(msgs::ContactCode::Slip, [-1.0, 0.0, 0.0], 50.0, [20.0, -10.0, 0.0]),
+                contact(msgs::ContactCode::Open, [0.0, 0.0, 0.0], 0.0, [0.0, 0.0, 0.0]),
+            ],
+            ..Default::default()
+        }
+    }
+
+    #[test]
+    fn sensor_names_become_valid_topic_tokens() {
+        assert_eq!(topic_token("hoist.rope-1"), "hoist_rope_1");
+        assert_eq!(topic_token("forks_load"), "forks_load");
+        assert_eq!(topic_token("2nd"), "s2nd");
+        assert_eq!(topic_token("a//b"), "a_b");
+        assert_eq!(topic_token("_x__y_"), "x_y");
+        assert_eq!(topic_token("-./"), "sensor");
+        assert_eq!(crate::topics::wrench("boom/left"), "/pivotsim/signals/boom_left");
+        for name in ["hoist.rope-1", "2nd", "a//b", "-./", "x"] {
+            let t = crate::topics::wrench(name);
+            assert!(ros2_name_ok(&t), "{t}");
+        }
+    }
+
+    /// The ROS 2 topic name rules the tokens must meet.
+    fn ros2_name_ok(t: &str) -> bool {
+        t.starts_with('/')
+            && !t.ends_with('/')
+            && !t.contains("//")
+            && !t.contains("__")
+            && t.chars().all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '/')
+            && t[1..].split('/').all(|tok| !tok.is_empty() && !tok.starts_with(|c: char| c.is_ascii_digit()))
+    }
+
+    #[test]
+    fn force_sensors_are_found_by_their_channels() {
+        let f = signals_frame();
+        let l = SignalLayout::new(&f);
+        assert!(l.matches(&f));
+        assert_eq!(l.wrenches_refused, 0);
+        assert_eq!(
+            l.wrenches,
+            [
+                WrenchSensor {
+                    sensor: "hoist.rope".into(),
+                    topic: "/pivotsim/signals/hoist_rope".into(),
+                    kind: WrenchKind::Joint,
+                    force: [0, 1, 2],
+                    torque: Some([3, 4, 5]),
+                },
+                WrenchSensor {
+                    sensor: "support".into(),
+                    topic: "/pivotsim/signals/support".into(),
+                    kind: WrenchKind::ContactSum,
+                    force: [6, 7, 8],
+                    torque: None,
+                },
+            ]
+        );
+        assert_eq!(l.wrenches[0].frame_id("world"), "joint_frame/hoist_rope");
+        assert_eq!(l.wrenches[1].frame_id("map"), "map");
+        let names = l.names_text();
+        assert_eq!(names.lines().count(), 14);
+        assert_eq!(names.lines().nth(12), Some("rope/tension"));
+        // Another order of the same names is another layout.
+        let mut g = f.clone();
+        g.channels.swap(12, 13);
+        assert!(!l.matches(&g));
+        g.channels.pop();
+        assert!(!l.matches(&g));
+    }
+
+    #[test]
+    fn alike_names_get_distinct_topics_and_the_count_is_bounded() {
+        let mut f = msgs::SignalsFrame::default();
+        for s in ["a-b", "a.b"] {
+            for c in ["fx", "fy", "fz"] {
+                f.channels.push(channel(&format!("{s}/{c}"), 0.0));
+            }
+        }
+        let l = SignalLayout::new(&f);
+        let topics: Vec<&str> = l.wrenches.iter().map(|w| w.topic.as_str()).collect();
+        assert_eq!(topics, ["/pivotsim/signals/a_b", "/pivotsim/signals/a_b_2"]);
+        let mut f = msgs::SignalsFrame::default();
+        for i in 0..MAX_WRENCH_TOPICS + 6 {
+            for c in ["fx", "fy", "fz"] {
+                f.channels.push(channel(&format!("s{i}/{c}"), 0.0));
+            }
+        }
+        let l = SignalLayout::new(&f);
+        assert_eq!((l.wrenches.len(), l.wrenches_refused), (MAX_WRENCH_TOPICS, 6));
+    }
+
+    #[test]
+    fn wrench_carries_the_channels_in_their_frame() {
+        let f = signals_frame();
+        let l = SignalLayout::new(&f);
+        let stamp = Time { sec: 1, nanosec: 500_000_000 };
+        let w = wrench(&l.wrenches[0], &f, stamp, "world").unwrap();
+        assert_eq!(
+            w,
+            WrenchStamped {
+                header: Header { stamp, frame_id: "joint_frame/hoist_rope".into() },
+                wrench: Wrench {
+                    force: Vector3 { x: 1.0, y: -2.0, z: 49.05 },
+                    torque: Vector3 { x: 0.5, y: 0.25, z: -0.125 },
+                },
+            }
+        );
+        let w = wrench(&l.wrenches[1], &f, stamp, "world").unwrap();
+        assert_eq!(w.header.frame_id, "world");
+        assert_eq!(
+            w.wrench,
+            Wrench { force: Vector3 { x: 3.0, y: 0.0, z: 98.1 }, torque: Vector3::default() }
+        );
+        // A dropped-out channel: no wrench.
+        let mut g = f.clone();
+        g.channels[4] = msgs::SignalChannel { dropout: true, value: 0.0, ..g.channels[4] };
+        assert!(wrench(&l.wrenches[0], &g, stamp, "world").is_none());
+        assert!(wrench(&l.wrenches[1], &g, stamp, "world").is_some());
+        // A frame of fewer channels than the layout: no wrench, no panic.
+        g.channels.truncate(7);
+        assert!(wrench(&l.wrenches[1], &g, stamp, "world").is_none());
+    }
+
+    #[test]
+    fn signals_array_is_the_channels_in_order_with_nan_on_dropout() {
+        let mut f = signals_frame();
+        f.channels[13] = msgs::SignalChannel { dropout: true, value: 0.0, ..f.channels[13] };
+        let mut a = Float64MultiArray::default();
+        signals_array(&f, &mut a);
+        assert_eq!(
+            a.layout,
+            MultiArrayLayout {
+                dim: vec![MultiArrayDimension { label: "channels".into(), size: 14, stride: 14 }],
+                data_offset: 0
+            }
+        );
+        assert_eq!(a.data.len(), 14);
+        assert_eq!(&a.data[..3], &[1.0, -2.0, 49.05]);
+        assert_eq!(a.data[12], 49.1);
+        assert!(a.data[13].is_nan());
+        // Reused for a smaller frame.
+        f.channels.truncate(2);
+        signals_array(&f, &mut a);
+        assert_eq!((a.data.as_slice(), a.layout.dim.len(), a.layout.dim[0].size), (&[1.0, -2.0][..], 1, 2));
+    }
+
+    #[test]
+    fn contact_arrows_run_from_the_point_along_the_force_coloured_by_state() {
+        let f = signals_frame();
+        let stamp = Time { sec: 1, nanosec: 500_000_000 };
+        let m = contact_markers(&f, 0.01, stamp, "world");
+        assert_eq!(m.markers.len(), 3, "DELETEALL, stick, slip; the open contact is not drawn");
+        let clear = &m.markers[0];
+        assert_eq!(
+            (clear.action, clear.ns.as_str(), clear.header.frame_id.as_str()),
+            (Marker::DELETEALL, CONTACTS_NS, "world")
+        );
+        let (stick, slip) = (&m.markers[1], &m.markers[2]);
+        for (a, id) in [(stick, 0), (slip, 1)] {
+            assert_eq!(
+                (a.type_, a.action, a.id, a.ns.as_str()),
+                (Marker::ARROW, Marker::ADD, id, CONTACTS_NS)
+            );
+            assert_eq!(a.header, Header { stamp, frame_id: "world".into() });
+            assert_eq!(a.scale, Vector3 { x: 0.01, y: 0.02, z: 0.0 });
+        }
+        // 100 N up at (1, 2, 0.5), 0.01 m/N: 1 m long.
+        assert_eq!(stick.points, [Point { x: 1.0, y: 2.0, z: 0.5 }, Point { x: 1.0, y: 2.0, z: 1.5 }]);
+        // 50 N up + (20, −10, 0) N friction at (−1, 0, 0).
+        assert_eq!(slip.points, [Point { x: -1.0, y: 0.0, z: 0.0 }, Point { x: -0.8, y: -0.1, z: 0.5 }]);
+        assert_eq!(stick.color, ColorRGBA { r: 0.1, g: 0.8, b: 0.1, a: 1.0 });
+        assert_eq!(slip.color, ColorRGBA { r: 1.0, g: 0.45, b: 0.0, a: 1.0 });
+        assert_eq!(contact_color(msgs::ContactCode::Open), ColorRGBA { r: 0.5, g: 0.5, b: 0.5, a: 1.0 });
+        // No contacts: only the DELETEALL, so the previous arrows vanish.
+        let empty = contact_markers(&msgs::SignalsFrame::default(), 0.01, stamp, "world");
+        assert_eq!(empty.markers.len(), 1);
+    }
+
+    #[test]
+    fn events_are_log_lines_warn_for_raised_and_faults() {
+        let e = msgs::EventRecord {
+            name: msgs::ActuatorName::new("hoist-overload").unwrap(),
+            kind: msgs::EventCode::Raised,
+            time: 2.5,
+            value: 31000.0,
+            level: 30000.0,
+        };
+        let stamp = Time { sec: 2, nanosec: 500_000_000 };
+        let l = event_log(&e, stamp, "pivotsim_bridge");
+        assert_eq!(
+            l,
+            Log {
+                stamp,
+                level: Log::WARN,
+                name: "pivotsim_bridge".into(),
+                msg: "pivotsim event hoist-overload raised at t = 2.500 s: value 31000, level 30000".into(),
+                ..Log::default()
+            }
+        );
+        assert_eq!(event_level(msgs::EventCode::Cleared), Log::INFO);
+        assert_eq!(event_level(msgs::EventCode::Fault), Log::WARN);
+        assert_eq!(event_level(msgs::EventCode::FaultRejected), Log::WARN);
+    }
+
+    #[test]
+    fn diagnostics_list_every_channel_and_the_signal_counters() {
+        let mut f = signals_frame();
+        let h = BridgeHealth {
+            signals: SignalCounters { signals_decode_failed: 3, wrench_topics: 2, ..Default::default() },
+            ..Default::default()
+        };
+        let a = diagnostics(None, Some(&f), &h, Time::default());
+        let s = a.get(DIAG_SIGNALS).unwrap();
+        assert_eq!(s.level, DiagnosticStatus::OK);
+        assert_eq!(s.value("support/fz"), Some("98.1"));
+        assert_eq!(s.value("contacts"), Some("3"));
+        let b = a.get(DIAG_BRIDGE).unwrap();
+        assert_eq!((b.value("signals_decode_failed"), b.value("wrench_topics")), (Some("3"), Some("2")));
+        f.channels[12] = msgs::SignalChannel { dropout: true, value: 0.0, ..f.channels[12] };
+        let a = diagnostics(None, Some(&f), &h, Time::default());
+        let s = a.get(DIAG_SIGNALS).unwrap();
+        assert_eq!((s.level, s.value("rope/tension")), (DiagnosticStatus::WARN, Some("dropout")));
+        assert!(diagnostics(None, None, &h, Time::default()).get(DIAG_SIGNALS).is_none());
+    }
 }
