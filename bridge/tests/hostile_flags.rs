@@ -16,6 +16,7 @@ fn hostile_values_of_every_numeric_flag_never_panic() {
     for v in ["nan", "inf", "-1", "0", "1e-300", "1e300", "x"] {
         rows.push(vec!["--stats-rate", v]);
         rows.push(vec!["--log-interval", v]);
+        rows.push(vec!["--force-scale", v]);
     }
     for v in ["-1", "65536", "1e3", "x"] {
         rows.push(vec!["--domain-id", v]);
@@ -29,7 +30,14 @@ fn hostile_values_of_every_numeric_flag_never_panic() {
 
 #[test]
 fn rates_and_intervals_out_of_range_are_clear_errors() {
-    for (flag, v) in [("--stats-rate", "1e-300"), ("--stats-rate", "nan"), ("--log-interval", "1e300")] {
+    for (flag, v) in [
+        ("--stats-rate", "1e-300"),
+        ("--stats-rate", "nan"),
+        ("--log-interval", "1e300"),
+        ("--force-scale", "0"),
+        ("--force-scale", "inf"),
+        ("--force-scale", "-1"),
+    ] {
         let args: Vec<String> = [flag, v].iter().map(|s| s.to_string()).collect();
         let o = pivotsim_tests::run(BIN, &args, Duration::from_secs(10));
         assert_eq!(o.code, Some(2), "{flag} {v}: {}", o.stderr);

@@ -9,6 +9,10 @@
 //! - A `/joy` stream moves the driven joint; when it stops, the server's deadman trips.
 //! - Malformed `/joy` (33 axes, a NaN axis) is rejected and counted by the bridge (its
 //!   diagnostics on `/pivotsim/stats`) and never reaches the server.
+//! - The operator signals: a hanging load's joint reaction and a resting crate's support force
+//!   arrive as `WrenchStamped` equal to m·g, every channel on `/pivotsim/signals`, the crate's
+//!   contacts as arrows, a live fault as a `/rosout` line, and a malformed signals frame is
+//!   counted without stopping anything.
 
 #![cfg(feature = "ros2")]
 
@@ -20,7 +24,7 @@ use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
 
 use pivotsim_msgs as msgs;
-use pivotsim_ros2_bridge::convert::{DIAG_BRIDGE, DIAG_INPUTS};
+use pivotsim_ros2_bridge::convert::{DIAG_BRIDGE, DIAG_INPUTS, DIAG_SIGNALS};
 use pivotsim_ros2_bridge::ros_msgs::*;
 use pivotsim_ros2_bridge::{dds, topics};
 use pivotsim_server::serve::{ServeConfig, ZenohOptions};
@@ -81,6 +85,56 @@ actuator = "spin"
 deadzone = 0.0
 "#;
 
+/// A static ground, a 10 kg crate resting on it (contact sum `support`, its contact points), and a
+/// 5 kg ball hanging 1 m below a ball joint to the world (joint sensor `hang.rope`, tension
+/// `rope`).
+const SIGRIG: &str = r#"
+[scene]
+name = "sigrig"
+[[body]]
+name = "ground"
+kind = "static"
+position = [0, 0, 0]
+[[body.shape]]
+type = "box"
+size = [4, 4, 0.2]
+[[body]]
+name = "crate"
+mass = 10
+position = [0, 0, 0.35]
+[[body.shape]]
+type = "box"
+size = [0.5, 0.5, 0.5]
+[[body]]
+name = "load"
+mass = 5
+position = [1.5, 0, 1]
+[[body.shape]]
+type = "ball"
+radius = 0.1
+[[joint]]
+name = "rope"
+type = "ball"
+a = "load"
+anchor = [1.5, 0, 2]
+[[sensor]]
+name = "hang.rope"
+type = "joint"
+joint = "rope"
+[[sensor]]
+name = "rope"
+type = "tension"
+joint = "rope"
+[[sensor]]
+name = "support"
+type = "contact_sum"
+bodies = ["crate"]
+[[sensor]]
+name = "crate_contacts"
+type = "contacts"
+bodies = ["crate"]
+"#;
+
 /// A DDS domain per test (and per process, so that concurrent runs rarely meet): 20 ..= 199, well
 /// inside the range whose RTPS port numbers fit in 16 bits.
 fn domain(test: u16) -> u16 {
@@ -89,7 +143,12 @@ fn domain(test: u16) -> u16 {
 
 /// The harness server on the test rig, Zenoh only (the bridge reads Zenoh).
 fn start_server(tag: &str) -> Server {
-    let scene = temp_file(&format!("ros2-{tag}.toml"), RIG);
+    start_scene(tag, RIG)
+}
+
+/// The harness server on a scene, Zenoh only.
+fn start_scene(tag: &str, toml: &str) -> Server {
+    let scene = temp_file(&format!("ros2-{tag}.toml"), toml);
     Server::start_with(&scene.display().to_string(), &format!("r-{tag}"), |c| c.iceoryx2 = false)
 }
 
@@ -101,9 +160,15 @@ struct Bridge {
 
 impl Bridge {
     fn spawn(server: &Server, domain: u16, tag: &str) -> Bridge {
+        Bridge::spawn_with(server, domain, tag, &[])
+    }
+
+    /// With more arguments.
+    fn spawn_with(server: &Server, domain: u16, tag: &str, more: &[&str]) -> Bridge {
         let log = temp_path(&format!("ros2-{tag}.log"));
         let child = Command::new(env!("CARGO_BIN_EXE_pivotsim-ros2-bridge"))
             .args(["--world", server.world.as_str(), "--connect", &server.endpoint])
+            .args(more)
             .args(["--domain-id", &domain.to_string(), "--dds-interface", "127.0.0.1"])
             .args(["--stats-rate", "20", "--source-id", "4242", "--log-interval", "1"])
             .env("RUST_LOG", "info,zenoh=warn,rustdds=error,ros2_client=error")
@@ -587,5 +652,183 @@ fn bridge_waits_for_a_late_server_and_never_slows_it() {
     assert_eq!(a.get(DIAG_BRIDGE).unwrap().level, DiagnosticStatus::OK);
     assert!(a.get(DIAG_INPUTS).is_some());
     eprintln!("late server: bridged; server at {rate:.1} steps/s with a stalled /tf subscriber");
+    drop(bridge);
+}
+
+/// `|a − b| ≤ tol · |b|`.
+fn close(a: f64, b: f64, tol: f64) -> bool {
+    (a - b).abs() <= tol * b.abs()
+}
+
+#[test]
+fn signals_reach_ros_as_wrenches_arrays_arrows_and_log_lines() {
+    const G: f64 = 9.81;
+    let server = start_scene("sig", SIGRIG);
+    let watcher = Watcher::connect(&server);
+    let d = domain(4);
+    // A Zenoh peer of the test that the bridge connects to as well (peers do not route between
+    // others: the server would not pass this one's frames on), to send it a malformed frame.
+    let inject_at = pivotsim_tests::free_endpoint();
+    let zc =
+        pivotsim_link::zenoh_config::ZenohEndpoints { listen: vec![inject_at.clone()], ..Default::default() };
+    let injector = zenoh::open(zc.config().unwrap()).wait().unwrap();
+    let bridge = Bridge::spawn_with(&server, d, "sig", &["--connect", &inject_at]);
+    let (_ctx, mut node) = ros_node(d, "sig_probe");
+    let rope_topic = topics::wrench("hang.rope");
+    assert_eq!(rope_topic, "/pivotsim/signals/hang_rope");
+    let rope_sub = subscribe::<WrenchStamped>(&mut node, &rope_topic, reliable(100));
+    let support_sub = subscribe::<WrenchStamped>(&mut node, &topics::wrench("support"), reliable(100));
+    let array_sub = subscribe::<Float64MultiArray>(&mut node, topics::SIGNALS, reliable(100));
+    let names_sub = subscribe::<RosString>(&mut node, topics::SIGNAL_NAMES, latched());
+    let arrows_sub = subscribe::<MarkerArray>(&mut node, topics::CONTACT_MARKERS, reliable(10));
+    let rosout_sub = subscribe::<Log>(&mut node, topics::ROSOUT, reliable(100));
+    let stats_sub = subscribe::<DiagnosticArray>(&mut node, topics::STATS, reliable(10));
+
+    // Readings after 1 s of simulation: the load hangs still and the crate rests.
+    let settled = |t: Time| t.as_nanos() >= 1_000_000_000;
+    let (mut rope, mut support, mut arrays, mut names, mut arrows) = (vec![], vec![], vec![], vec![], vec![]);
+    let deadline = Instant::now() + Duration::from_secs(30);
+    let enough = |r: &[(WrenchStamped, Instant)], s: &[(WrenchStamped, Instant)]| {
+        r.iter().filter(|(w, _)| settled(w.header.stamp)).count() >= 20
+            && s.iter().filter(|(w, _)| settled(w.header.stamp)).count() >= 20
+    };
+    while Instant::now() < deadline
+        && !(enough(&rope, &support) && arrays.len() >= 20 && !names.is_empty() && arrows.len() >= 20)
+    {
+        drain(&rope_sub, &mut rope);
+        drain(&support_sub, &mut support);
+        drain(&array_sub, &mut arrays);
+        drain(&names_sub, &mut names);
+        drain(&arrows_sub, &mut arrows);
+        std::thread::sleep(Duration::from_millis(5));
+    }
+    assert!(enough(&rope, &support), "{} rope and {} support wrenches in 30 s", rope.len(), support.len());
+    assert!(
+        arrays.len() >= 20 && !names.is_empty() && arrows.len() >= 20,
+        "{} arrays, {} name lists, {} arrow arrays",
+        arrays.len(),
+        names.len(),
+        arrows.len()
+    );
+
+    // The hanging load: the joint holds its weight, |F| = m g, in the joint's frame.
+    let (m_load, m_crate) = (5.0, 10.0);
+    for (w, _) in rope.iter().filter(|(w, _)| settled(w.header.stamp)) {
+        assert_eq!(w.header.frame_id, "joint_frame/hang_rope");
+        let f = w.wrench.force;
+        let n = (f.x * f.x + f.y * f.y + f.z * f.z).sqrt();
+        assert!(close(n, m_load * G, 1e-6), "rope |F| = {n} N, {} expected", m_load * G);
+    }
+    // The resting crate: the ground pushes it up with its weight, world frame, no torque.
+    for (w, _) in support.iter().filter(|(w, _)| settled(w.header.stamp)) {
+        assert_eq!(w.header.frame_id, "world");
+        let f = w.wrench.force;
+        assert!(close(f.z, m_crate * G, 1e-6), "support fz = {} N, {} expected", f.z, m_crate * G);
+        assert!(f.x.abs() <= 1e-6 * m_crate * G && f.y.abs() <= 1e-6 * m_crate * G, "{f:?}");
+        assert_eq!(w.wrench.torque, Vector3::default());
+    }
+    // Stamped with simulation time, increasing.
+    assert!(rope.windows(2).all(|w| w[1].0.header.stamp > w[0].0.header.stamp));
+
+    // Every channel on /pivotsim/signals, named by line on /pivotsim/signal_names.
+    let names: Vec<String> = names.last().unwrap().0.data.lines().map(str::to_string).collect();
+    let at = |n: &str| names.iter().position(|x| x == n).unwrap_or_else(|| panic!("{n} in {names:?}"));
+    let (tension, fz) = (at("rope/tension"), at("support/fz"));
+    let last = &arrays.last().unwrap().0;
+    assert_eq!(last.layout.dim.len(), 1);
+    assert_eq!(
+        (last.layout.dim[0].label.as_str(), last.layout.dim[0].size as usize),
+        ("channels", names.len())
+    );
+    assert_eq!(last.data.len(), names.len());
+    assert!(close(last.data[tension], m_load * G, 1e-6), "tension {}", last.data[tension]);
+    assert!(close(last.data[fz], m_crate * G, 1e-6), "support/fz {}", last.data[fz]);
+
+    // The crate's contacts: a DELETEALL, then pressed points as arrows from the point along the
+    // force on B; together they carry the weight (0.001 m/N by default).
+    let a = &arrows.last().unwrap().0;
+    assert_eq!(a.markers[0].action, Marker::DELETEALL);
+    let pressed = &a.markers[1..];
+    assert!(!pressed.is_empty(), "no contact arrows");
+    let mut sum = [0.0; 3];
+    for m in pressed {
+        assert_eq!((m.type_, m.header.frame_id.as_str(), m.points.len()), (Marker::ARROW, "world", 2));
+        assert!(m.color.g > 0.5 && m.color.r < 0.5, "a resting crate sticks: {:?}", m.color);
+        let (p, q) = (m.points[0], m.points[1]);
+        assert!((p.z - 0.1).abs() < 1e-3, "contact point at z = {}", p.z);
+        for (k, d) in [q.x - p.x, q.y - p.y, q.z - p.z].into_iter().enumerate() {
+            sum[k] += d / 0.001;
+        }
+    }
+    assert!(close(sum[2].abs(), m_crate * G, 1e-6), "arrows sum to {sum:?} N");
+
+    // A live fault: a /rosout WARN line; the support sensor drops out (no wrench, NaN).
+    let fault = msgs::ControlCommand::Fault {
+        fault: msgs::FaultKind::Dropout,
+        target: "support".into(),
+        tension: None,
+        to: None,
+        ramp: None,
+    };
+    watcher.control(&server, fault);
+    let mut logs = Vec::new();
+    let deadline = Instant::now() + Duration::from_secs(10);
+    let fault_line = loop {
+        assert!(Instant::now() < deadline, "no fault line on /rosout: {logs:?}");
+        drain(&rosout_sub, &mut logs);
+        if let Some((l, _)) =
+            logs.iter().find(|(l, _)| l.msg.starts_with("pivotsim event") && l.msg.contains(" fault "))
+        {
+            break l.clone();
+        }
+        std::thread::sleep(Duration::from_millis(10));
+    };
+    assert_eq!(fault_line.level, Log::WARN);
+    assert_eq!(fault_line.name, "pivotsim_bridge");
+    std::thread::sleep(Duration::from_millis(300));
+    drain(&support_sub, &mut Vec::new());
+    drain(&array_sub, &mut Vec::new());
+    std::thread::sleep(Duration::from_millis(300));
+    let (mut after, mut arrays_after) = (vec![], vec![]);
+    drain(&support_sub, &mut after);
+    drain(&array_sub, &mut arrays_after);
+    assert!(after.is_empty(), "{} support wrenches while it drops out", after.len());
+    let last = &arrays_after.last().expect("arrays keep coming").0;
+    assert!(last.data[fz].is_nan() && close(last.data[tension], m_load * G, 1e-6));
+
+    // A malformed signals frame on the server's key: counted by the bridge, which goes on.
+    let bad = injector.declare_publisher(server.key(msgs::Topic::Signals)).wait().unwrap();
+    let mut sent = 0;
+    let count = |a: &DiagnosticArray, key: &str| -> u64 {
+        a.get(DIAG_BRIDGE).and_then(|s| s.value(key)).map(|v| v.parse().unwrap()).unwrap_or(0)
+    };
+    let deadline = Instant::now() + Duration::from_secs(10);
+    let diag = loop {
+        assert!(Instant::now() < deadline, "the malformed signals frame was not counted");
+        if sent < 20 {
+            bad.put(b"PVSM not a frame".to_vec()).wait().unwrap();
+            sent += 1;
+        }
+        let mut got = Vec::new();
+        drain(&stats_sub, &mut got);
+        if let Some((a, _)) = got.into_iter().rev().find(|(a, _)| count(a, "signals_decode_failed") >= 1) {
+            break a;
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    };
+    let failed = count(&diag, "signals_decode_failed");
+    assert!((1..=sent).contains(&failed), "{failed} undecodable of {sent} sent");
+    assert_eq!(count(&diag, "wrench_topics"), 2);
+    assert!(count(&diag, "events_logged") >= 1);
+    let sig = diag.get(DIAG_SIGNALS).expect("signals status");
+    assert_eq!(sig.value("support/fz"), Some("dropout"));
+    let mut more = Vec::new();
+    let deadline = Instant::now() + Duration::from_secs(5);
+    while more.len() < 5 {
+        assert!(Instant::now() < deadline, "no wrenches after the malformed frame");
+        drain(&rope_sub, &mut more);
+        std::thread::sleep(Duration::from_millis(10));
+    }
+    assert!(bridge.log().contains("signals frame:"), "the bridge logs the malformed frame");
     drop(bridge);
 }
