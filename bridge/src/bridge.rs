@@ -232,6 +232,8 @@ struct Bridge<'a> {
     layout: Option<SignalLayout>,
     wrench_outs: HashMap<String, Out<WrenchStamped>>,
     array: Float64MultiArray,
+    /// Whether the last contact array drew contacts.
+    contacts_shown: bool,
     counters: SignalCounters,
 }
 
@@ -387,12 +389,17 @@ impl Bridge<'_> {
                 }
             }
         }
-        self.out.contact_markers.publish(convert::contact_markers(
-            &self.signals,
-            self.config.force_scale,
-            stamp,
-            world_frame,
-        ));
+        // The arrows while there are contacts, and once more (a lone DELETEALL) when they are gone.
+        let contacts = !self.signals.contacts.is_empty();
+        if contacts || self.contacts_shown {
+            self.out.contact_markers.publish(convert::contact_markers(
+                &self.signals,
+                self.config.force_scale,
+                stamp,
+                world_frame,
+            ));
+        }
+        self.contacts_shown = contacts;
         self.signals_published = Some((sequence, sim_time.to_bits()));
     }
 
@@ -567,6 +574,7 @@ pub fn run(config: &BridgeConfig, shutdown: Arc<AtomicBool>) -> anyhow::Result<B
         layout: None,
         wrench_outs: HashMap::new(),
         array: Float64MultiArray::default(),
+        contacts_shown: false,
         counters: SignalCounters::default(),
     };
     while !shutdown.load(Ordering::Relaxed) && !joy.is_finished() {
