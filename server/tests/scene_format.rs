@@ -367,3 +367,12 @@ fn the_contact_margin_is_read_and_checked() {
         assert!(e.to_string().contains("contact_margin"), "{e}");
     }
 }
+
+#[test]
+fn projected_arc_reaches_the_solver_and_is_bounded() {
+    let w = load("[scene]\nname = \"t\"\nprojected_arc = 4\n").world;
+    assert_eq!(w.settings().solver.projected_arc, 4);
+    assert_eq!(load("[scene]\nname = \"t\"\n").world.settings().solver.projected_arc, 0, "off by default");
+    let e = load_err("[scene]\nname = \"t\"\nprojected_arc = 31\n").to_string();
+    assert!(e.contains("projected_arc") && e.contains("at most 30"), "{e}");
+}

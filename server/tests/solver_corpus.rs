@@ -17,14 +17,20 @@ use std::path::PathBuf;
 use pivotsim_server::solver::{Mlcp, SolveStatus, Solver, SolverOptions, Variant, io};
 
 fn corpus() -> Vec<(String, Mlcp)> {
-    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/data/corpus");
+    let files = read_dir_files("tests/data/corpus");
+    assert!(files.len() >= 24, "corpus: only {} files", files.len());
+    files
+}
+
+/// Every `.txt` problem of a folder under `server/`, sorted by name.
+fn read_dir_files(folder: &str) -> Vec<(String, Mlcp)> {
+    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join(folder);
     let mut files: Vec<PathBuf> = std::fs::read_dir(&dir)
         .unwrap_or_else(|e| panic!("{}: {e}", dir.display()))
         .map(|e| e.unwrap().path())
         .filter(|p| p.extension().is_some_and(|x| x == "txt"))
         .collect();
     files.sort();
-    assert!(files.len() >= 24, "corpus: only {} files in {}", files.len(), dir.display());
     files
         .iter()
         .map(|p| {
@@ -222,4 +228,42 @@ fn capped_answers_hold_their_joints() {
     }
     assert!(capped >= 20, "only {capped} capped solves: the test checks nothing");
     assert!(worst_off > 1e-6, "without exact_bilateral the joints were solved anyway ({worst_off:e})");
+}
+
+#[test]
+fn the_projection_arc_shortens_the_vehicles_hard_solves() {
+    // The four hardest solves of the vehicle's 20 s at contact compliance 1e-10
+    // (`tests/data/vehicle/`): geared, torque-bounded couplings and sliding wheels, where the
+    // active-set safeguard binds one bound per step after its full projected Newton step fails.
+    // With 4 halvings along the projection arc (`projected_arc`, the vehicle's setting) each file
+    // must still be solved exactly, by the independent residual, and in clearly fewer steps.
+    let files = read_dir_files("tests/data/vehicle");
+    assert_eq!(files.len(), 4, "vehicle problems");
+    let mut solver = Solver::new(SolverOptions::default());
+    let mut total = [0usize; 2];
+    for (name, p) in &files {
+        for (k, arc) in [0, 4].into_iter().enumerate() {
+            solver.set_options(SolverOptions {
+                variant: Variant::Auto,
+                max_steps: 100,
+                projected_arc: arc,
+                ..Default::default()
+            });
+            let mut lambda = vec![0.0; p.n()];
+            let st = solver.solve(p, &mut lambda).clone();
+            let (r, f, viol) = judge(p, &lambda);
+            eprintln!(
+                "{name} projected_arc {arc}: {:?} in {} steps, residual {r:.1e}",
+                st.status, st.pivot_steps
+            );
+            assert_eq!(st.status, SolveStatus::Converged, "{name} arc {arc}");
+            assert!(
+                r <= 1e-9 && viol <= 1e-12 && f <= 0.0,
+                "{name} arc {arc}: r {r:e}, violation {viol:e}, f {f:e}"
+            );
+            total[k] += st.pivot_steps;
+        }
+    }
+    eprintln!("pivot steps of the four: {} without the arc, {} with it", total[0], total[1]);
+    assert!(4 * total[1] <= 3 * total[0], "the arc saved too little: {total:?}");
 }

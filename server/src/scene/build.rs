@@ -668,6 +668,16 @@ impl<'a> Builder<'a> {
         if let Some(n) = sec.ipm_cold_after {
             settings.solver.ipm_cold_after = n;
         }
+        if let Some(n) = sec.projected_arc {
+            if n > 30 {
+                return Err(self.invalid(
+                    sspan,
+                    "projected_arc",
+                    "must be at most 30 (halvings of the step)",
+                ));
+            }
+            settings.solver.projected_arc = n;
+        }
         if let Some(n) = sec.polish_sweeps {
             settings.solver.polish_sweeps = n;
         }

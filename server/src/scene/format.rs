@@ -64,6 +64,7 @@ pub(crate) struct SceneSection {
     pub murty_after: Option<usize>,
     pub ipm_after: Option<usize>,
     pub ipm_cold_after: Option<usize>,
+    pub projected_arc: Option<usize>,
     pub polish_sweeps: Option<usize>,
     pub pgs_sweeps: Option<usize>,
     pub exact_bilateral: Option<bool>,

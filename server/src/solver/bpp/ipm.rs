@@ -54,6 +54,11 @@
 //! compliance 1e-10 31 capped solves → 19 (k = 0), 22 (3), 26 (6); vehicle at 1e-10 1 → 0 (k = 3,
 //! mean solve 3× longer), 2 (10); forklift at 1e-10 9 → 8–9; but the forwarder 8 → 16–29: its
 //! grasp is where the method stalls, and the steps it spends are missing from the pivoting.
+//! Together with semismooth Newton first (`newton_first`, whose own measure alone is 53 there)
+//! the winch's sliding chain gains most: at 1e-10 31 → 3 (k = 4), 6 (6), 5 (8 and 10) — but 167
+//! at k = 14, a cascade — and at 1e-8 12 → 0, for a mean solve 1.5× longer at its shipped 1e-7;
+//! the winch scene ships with `newton_first` and `ipm_after = 4`. The same pair costs the
+//! forklift at 1e-10 (9 → 15 at k = 6, 26 with Newton first alone).
 //! Switching only once the outer friction iteration has begun (after 3 steps and 1 or 3 bound
 //! updates) was worse: forklift at 1e-10 743 capped solves (a cascade), forwarder 75–124.
 //! Why the grasp stalls (measured on `forwarder-hard00`): the steps collapse to `α ≈ 1e-5…1e-10`

@@ -229,6 +229,11 @@ pub struct SolverOptions {
     /// The same switch for a cold solve with friction (no warm `λ`): after this many pivot steps
     /// (default 3: easy problems finish before it; measured in `ipm.rs`); `usize::MAX`: never.
     pub ipm_cold_after: usize,
+    /// Halvings of the step tried along the projection arc `P(λ + t (λ̂ − λ))` when the full
+    /// projected Newton step of the active-set safeguard fails its Armijo test (`safeguard.rs`);
+    /// 0: only the full step, then the exact ratio-test step. Measured in `safeguard.rs`: the
+    /// vehicle's geared, boxed rows want 4, redundant contact sets (forwarder) want 0.
+    pub projected_arc: usize,
 }
 
 impl Default for SolverOptions {
@@ -256,6 +261,7 @@ impl Default for SolverOptions {
             safeguard_after_update: true,
             ipm_after: usize::MAX,
             ipm_cold_after: 3,
+            projected_arc: 0,
         }
     }
 }
