@@ -1,6 +1,7 @@
 //! The bridge loop. Two threads: the main loop waits for the newest frames from the server and
-//! publishes them to ROS (`/tf`, `/pivotsim/poses`, `/clock` per pose frame; `/tf_static` and
-//! `/pivotsim/markers` per scene; `/pivotsim/signals`, the wrenches and
+//! publishes them to ROS (`/tf`, `/pivotsim/poses`, `/clock` per pose frame; `/tf_static` (static
+//! bodies and the joint frames of the joint, cylinder and drum sensors) and `/pivotsim/markers`
+//! per scene; `/pivotsim/signals`, the wrenches and
 //! `/pivotsim/contact_markers` per signals frame; `/rosout` per event; `/pivotsim/stats` on a
 //! timer), and the joy thread waits on the `/joy` subscription and forwards each valid message to
 //! the server at once.
@@ -260,6 +261,9 @@ impl Bridge<'_> {
                 self.scene = Some(s);
                 self.static_sent = false;
                 self.published = None;
+                // Force sensors are classified by the description's sensors: again on the next
+                // signals frame.
+                self.layout = None;
             }
             Ok(_) => {}
             Err(e) => warn!("scene description: {e}"),
@@ -293,7 +297,11 @@ impl Bridge<'_> {
             Some(_) if repeat && config.stamp == crate::StampSource::Sim => {}
             Some(s) if s.matches(frame) => {
                 let stamp = config.stamp.stamp(frame.sim_time, frame.wall_time_ns);
-                let (moving, fixed) = convert::transforms(s, frame, stamp, &config.world_frame);
+                let (moving, mut fixed) = convert::transforms(s, frame, stamp, &config.world_frame);
+                if !self.static_sent {
+                    // One latched message (keep last 1): the static bodies and the joint frames.
+                    fixed.transforms.extend(convert::joint_frame_transforms(s, stamp, &config.world_frame));
+                }
                 if !self.static_sent && !fixed.transforms.is_empty() {
                     self.static_sent = self.out.tf_static.publish(fixed);
                 }
@@ -373,7 +381,8 @@ impl Bridge<'_> {
             return;
         }
         if !self.layout.as_ref().is_some_and(|l| l.matches(&self.signals)) {
-            self.set_layout(SignalLayout::new(&self.signals));
+            let scene = self.scene.as_ref().map(|s| &s.description);
+            self.set_layout(SignalLayout::new(&self.signals, scene));
         }
         let stamp = self.signals_stamp(sequence, sim_time);
         let world_frame = &self.config.world_frame;

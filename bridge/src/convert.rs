@@ -448,14 +448,29 @@ pub fn topic_token(name: &str) -> String {
     out
 }
 
-/// What a force sensor's wrench is expressed in.
+/// The `/tf` frame id of a joint's frame (`joint/<joint name>`), published on `/tf_static` as a
+/// child of the frame's body for every joint a joint, cylinder or drum sensor reads.
+pub fn joint_frame_id(joint: &str) -> String {
+    format!("joint/{joint}")
+}
+
+/// What a force sensor's wrench is, and in which frame.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum WrenchKind {
-    /// `fx fy fz tx ty tz`: a joint sensor, the reaction on the joint's body A at its anchor, in
-    /// A's joint frame (x = the joint axis).
+    /// `fx fy fz tx ty tz`: a joint sensor, the joint's force and torque on the body its frame is
+    /// fixed on (the joint's child, body `a` of the scene), torque about the anchor, in the
+    /// joint's frame (x = the joint axis).
     Joint,
     /// `fx fy fz` without torques: a contact force sum, in the world frame.
     ContactSum,
+    /// `force`: a cylinder sensor, the force along its joint's axis: the wrench's force is
+    /// `(force, 0, 0)` in the joint's frame (the other components are not measured), torque 0.
+    /// Only with a scene description that has sensors.
+    Cylinder,
+    /// `torque`: a drum sensor, the torque about its joint's axis: the wrench's torque is
+    /// `(torque, 0, 0)` in the joint's frame (the other components are not measured), force 0.
+    /// Only with a scene description that has sensors.
+    Drum,
 }
 
 /// One force sensor of the signals frame and its wrench topic.
@@ -466,22 +481,25 @@ pub struct WrenchSensor {
     /// Topic: [`WRENCH_TOPIC_PREFIX`] + [`topic_token`] of the name (`_2`, `_3`, … appended when
     /// two names sanitize alike).
     pub topic: String,
-    /// Joint reaction or contact sum.
+    /// Joint reaction, contact sum, cylinder force or drum torque.
     pub kind: WrenchKind,
-    /// Channel indices of `fx fy fz`.
-    pub force: [usize; 3],
-    /// Channel indices of `tx ty tz` (joint sensors).
-    pub torque: Option<[usize; 3]>,
+    /// The joint whose frame ([`joint_frame_id`]) the wrench is in, from the scene description;
+    /// `None` for a contact sum, and for a joint sensor found without a description.
+    pub joint: Option<String>,
+    /// Channel indices of the wrench's `force.x force.y force.z torque.x torque.y torque.z`;
+    /// `None`: not measured by this sensor, 0 in the wrench.
+    pub channels: [Option<usize>; 6],
 }
 
 impl WrenchSensor {
-    /// The `frame_id` of its wrench: `world_frame` for a contact sum; for a joint sensor
-    /// `joint_frame/<token>` — A's joint frame, which the scene description does not carry, so
-    /// it is not on `/tf`.
+    /// The `frame_id` of its wrench: `world_frame` for a contact sum; for the others the joint's
+    /// frame `joint/<joint>` (on `/tf_static`). A joint sensor found without a scene description
+    /// gets `joint_frame/<token>`, a frame on no `/tf`.
     pub fn frame_id(&self, world_frame: &str) -> String {
-        match self.kind {
-            WrenchKind::ContactSum => world_frame.to_string(),
-            WrenchKind::Joint => format!("joint_frame/{}", &self.topic[WRENCH_TOPIC_PREFIX.len()..]),
+        match (self.kind, &self.joint) {
+            (WrenchKind::ContactSum, _) => world_frame.to_string(),
+            (_, Some(joint)) => joint_frame_id(joint),
+            (_, None) => format!("joint_frame/{}", &self.topic[WRENCH_TOPIC_PREFIX.len()..]),
         }
     }
 }
@@ -498,12 +516,17 @@ pub struct SignalLayout {
 }
 
 impl SignalLayout {
-    /// The layout of `frame`'s channels. A sensor is a force sensor when its channels include
-    /// `fx`, `fy` and `fz`: with `tx`, `ty` and `tz` too it is a joint sensor (joint frame),
-    /// without them a contact sum (world frame). Scalar channels (`tension`, a cylinder's
-    /// `force`, a drum's `torque`, cable tensions, the tipping margin, counts) are only in
-    /// `/pivotsim/signals`.
-    pub fn new(frame: &msgs::SignalsFrame) -> SignalLayout {
+    /// The layout of `frame`'s channels, with the force sensors found in them.
+    ///
+    /// A sensor that `scene` lists is classified by its kind: `joint` (channels `fx fy fz tx ty
+    /// tz`, in its joint's frame), `contact_sum` (`fx fy fz`, world frame), `cylinder` (`force`
+    /// along its joint's axis) and `drum` (`torque` about it) are force sensors; the others
+    /// (`tension`, `cable`, `tipping`, `contacts`) are not. A sensor the description does not list
+    /// (no description, or one of an older server without sensors) is classified by its channel
+    /// names: with `fx`, `fy` and `fz` it is a force sensor, with `tx`, `ty` and `tz` too a joint
+    /// sensor in a frame the bridge does not know, without them a contact sum. A listed sensor
+    /// whose channels are not those of its kind is no force sensor.
+    pub fn new(frame: &msgs::SignalsFrame, scene: Option<&msgs::SceneDescription>) -> SignalLayout {
         let names: Vec<msgs::ActuatorName> = frame.channels.iter().map(|c| c.name).collect();
         // Sensors in order of first appearance, with the index of each of their channels.
         let mut sensors: Vec<(&str, HashMap<&str, usize>)> = Vec::new();
@@ -519,13 +542,35 @@ impl SignalLayout {
         let mut layout = SignalLayout::default();
         let mut taken: Vec<String> = Vec::new();
         for (sensor, ch) in &sensors {
-            let three = |a, b, c| Some([*ch.get(a)?, *ch.get(b)?, *ch.get(c)?]);
-            let Some(force) = three("fx", "fy", "fz") else { continue };
+            let get = |names: [&str; 6]| names.map(|n| if n.is_empty() { None } else { ch.get(n).copied() });
+            let all = |c: &[Option<usize>; 6], n: usize| c.iter().filter(|i| i.is_some()).count() == n;
+            let six = get(["fx", "fy", "fz", "tx", "ty", "tz"]);
+            let three = get(["fx", "fy", "fz", "", "", ""]);
+            let found = match scene.and_then(|d| d.sensor(sensor)) {
+                Some(msgs::SensorInfo::Joint { joint, .. }) if all(&six, 6) => {
+                    Some((WrenchKind::Joint, Some(joint.clone()), six))
+                }
+                Some(msgs::SensorInfo::ContactSum { .. }) if all(&three, 3) => {
+                    Some((WrenchKind::ContactSum, None, three))
+                }
+                Some(msgs::SensorInfo::Cylinder { joint, .. }) => {
+                    let c = get(["force", "", "", "", "", ""]);
+                    all(&c, 1).then(|| (WrenchKind::Cylinder, Some(joint.clone()), c))
+                }
+                Some(msgs::SensorInfo::Drum { joint, .. }) => {
+                    let c = get(["", "", "", "torque", "", ""]);
+                    all(&c, 1).then(|| (WrenchKind::Drum, Some(joint.clone()), c))
+                }
+                Some(_) => None,
+                None if all(&six, 6) => Some((WrenchKind::Joint, None, six)),
+                None if all(&three, 3) => Some((WrenchKind::ContactSum, None, three)),
+                None => None,
+            };
+            let Some((kind, joint, channels)) = found else { continue };
             if layout.wrenches.len() == MAX_WRENCH_TOPICS {
                 layout.wrenches_refused += 1;
                 continue;
             }
-            let torque = three("tx", "ty", "tz");
             let base = topic_token(sensor);
             let mut token = base.clone();
             let mut k = 1;
@@ -537,9 +582,9 @@ impl SignalLayout {
             layout.wrenches.push(WrenchSensor {
                 sensor: sensor.to_string(),
                 topic: format!("{WRENCH_TOPIC_PREFIX}{token}"),
-                kind: if torque.is_some() { WrenchKind::Joint } else { WrenchKind::ContactSum },
-                force,
-                torque,
+                kind,
+                joint,
+                channels,
             });
         }
         layout.names = names;
@@ -564,29 +609,69 @@ impl SignalLayout {
     }
 }
 
-/// The wrench of a force sensor in `frame` (N, N m; the torque is 0 for a contact sum), or `None`
-/// while one of its channels drops out (no reading) or the frame is not of the layout's scene.
+/// The joint frames on `/tf_static`: for every joint that a `joint`, `cylinder` or `drum` sensor
+/// of the description reads (once per joint, in sensor order), its frame as a child of the frame's
+/// body (`<body name>` → [`joint_frame_id`]), or of `world_frame` for a frame on the world.
+/// Joints without a frame, or on a body the description does not have, are left out.
+pub fn joint_frame_transforms(scene: &SceneInfo, stamp: Time, world_frame: &str) -> Vec<TransformStamped> {
+    let d = &scene.description;
+    let mut out: Vec<TransformStamped> = Vec::new();
+    for s in &d.sensors {
+        let (msgs::SensorInfo::Joint { joint, .. }
+        | msgs::SensorInfo::Cylinder { joint, .. }
+        | msgs::SensorInfo::Drum { joint, .. }) = s
+        else {
+            continue;
+        };
+        let child = joint_frame_id(joint);
+        if out.iter().any(|t| t.child_frame_id == child) {
+            continue;
+        }
+        let Some(f) = d.joint(joint).and_then(|j| j.frame.as_ref()) else { continue };
+        let parent = match f.body {
+            Some(id) => match scene.body(id) {
+                Some(b) => b.name.clone(),
+                None => continue,
+            },
+            None => world_frame.to_string(),
+        };
+        out.push(TransformStamped {
+            header: Header { stamp, frame_id: parent },
+            child_frame_id: child,
+            transform: Transform {
+                translation: Vector3 { x: f.position[0], y: f.position[1], z: f.position[2] },
+                rotation: Quaternion::from_array(f.orientation),
+            },
+        });
+    }
+    out
+}
+
+/// The wrench of a force sensor in `frame` (N, N m; components its sensor does not measure are
+/// 0), or `None` while one of its channels drops out (no reading) or the frame is not of the
+/// layout's scene.
 pub fn wrench(
     sensor: &WrenchSensor,
     frame: &msgs::SignalsFrame,
     stamp: Time,
     world_frame: &str,
 ) -> Option<WrenchStamped> {
-    let read = |i: [usize; 3]| -> Option<Vector3> {
-        let c = [frame.channels.get(i[0])?, frame.channels.get(i[1])?, frame.channels.get(i[2])?];
-        if c.iter().any(|c| c.dropout) {
-            return None;
+    let mut v = [0.0; 6];
+    for (k, i) in sensor.channels.iter().enumerate() {
+        if let Some(i) = *i {
+            let c = frame.channels.get(i)?;
+            if c.dropout {
+                return None;
+            }
+            v[k] = c.value;
         }
-        Some(Vector3 { x: c[0].value, y: c[1].value, z: c[2].value })
-    };
-    let force = read(sensor.force)?;
-    let torque = match sensor.torque {
-        Some(t) => read(t)?,
-        None => Vector3::default(),
-    };
+    }
     Some(WrenchStamped {
         header: Header { stamp, frame_id: sensor.frame_id(world_frame) },
-        wrench: Wrench { force, torque },
+        wrench: Wrench {
+            force: Vector3 { x: v[0], y: v[1], z: v[2] },
+            torque: Vector3 { x: v[3], y: v[4], z: v[5] },
+        },
     })
 }
 
@@ -1050,10 +1135,19 @@ mod tests {
             && t[1..].split('/').all(|tok| !tok.is_empty() && !tok.starts_with(|c: char| c.is_ascii_digit()))
     }
 
+    /// The channel indices of a wrench of force channels `f` and torque channels `t`.
+    fn ch(f: Option<[usize; 3]>, t: Option<[usize; 3]>) -> [Option<usize>; 6] {
+        let mut c = [None; 6];
+        for (k, i) in f.into_iter().flatten().chain(t.into_iter().flatten()).enumerate() {
+            c[if f.is_some() { k } else { k + 3 }] = Some(i);
+        }
+        c
+    }
+
     #[test]
-    fn force_sensors_are_found_by_their_channels() {
+    fn without_a_description_force_sensors_are_found_by_their_channels() {
         let f = signals_frame();
-        let l = SignalLayout::new(&f);
+        let l = SignalLayout::new(&f, None);
         assert!(l.matches(&f));
         assert_eq!(l.wrenches_refused, 0);
         assert_eq!(
@@ -1063,15 +1157,15 @@ mod tests {
                     sensor: "hoist.rope".into(),
                     topic: "/pivotsim/signals/hoist_rope".into(),
                     kind: WrenchKind::Joint,
-                    force: [0, 1, 2],
-                    torque: Some([3, 4, 5]),
+                    joint: None,
+                    channels: ch(Some([0, 1, 2]), Some([3, 4, 5])),
                 },
                 WrenchSensor {
                     sensor: "support".into(),
                     topic: "/pivotsim/signals/support".into(),
                     kind: WrenchKind::ContactSum,
-                    force: [6, 7, 8],
-                    torque: None,
+                    joint: None,
+                    channels: ch(Some([6, 7, 8]), None),
                 },
             ]
         );
@@ -1086,6 +1180,170 @@ mod tests {
         assert!(!l.matches(&g));
         g.channels.pop();
         assert!(!l.matches(&g));
+        // A description without sensors (an older server): the same.
+        let d = description();
+        let old = msgs::SceneDescription { sensors: vec![], ..d };
+        assert_eq!(SignalLayout::new(&f, Some(&old)), l);
+    }
+
+    /// The scene of [`signals_frame`]: a static `beam`, a `hook` hanging from it on the ball joint
+    /// `rope` (frame on the hook, rotated), a `crate`, a `cylinder` body on the prismatic `lift`
+    /// to the world (frame on the world), a `drum` on the hinge `reel`, and sensors of several
+    /// kinds (two joint sensors on `rope`).
+    fn description() -> msgs::SceneDescription {
+        let body = |id, name: &str, kind| msgs::BodyInfo {
+            id,
+            name: name.into(),
+            kind,
+            mass: if kind == msgs::BodyKind::Dynamic { 1.0 } else { 0.0 },
+            colliders: vec![],
+        };
+        let h = std::f64::consts::FRAC_1_SQRT_2;
+        let d = msgs::SceneDescription {
+            world: "w".into(),
+            scene: "s".into(),
+            timestep: 0.01,
+            gravity: [0.0, 0.0, -9.81],
+            bodies: vec![
+                body(4, "beam", msgs::BodyKind::Static),
+                body(5, "hook", msgs::BodyKind::Dynamic),
+                body(6, "crate", msgs::BodyKind::Dynamic),
+                body(7, "cylinder", msgs::BodyKind::Dynamic),
+                body(8, "drum", msgs::BodyKind::Dynamic),
+            ],
+            joints: vec![
+                msgs::JointInfo {
+                    name: "rope".into(),
+                    kind: msgs::JointKind::Ball,
+                    parent: Some(4),
+                    child: 5,
+                    frame: Some(msgs::JointFrame {
+                        body: Some(5),
+                        position: [0.0, 0.0, 1.0],
+                        orientation: [0.0, h, 0.0, h],
+                    }),
+                },
+                msgs::JointInfo {
+                    name: "lift".into(),
+                    kind: msgs::JointKind::Prismatic,
+                    parent: None,
+                    child: 7,
+                    frame: Some(msgs::JointFrame {
+                        body: None,
+                        position: [3.0, 0.0, 0.5],
+                        orientation: [0.0, 0.0, 0.0, 1.0],
+                    }),
+                },
+                msgs::JointInfo {
+                    name: "reel".into(),
+                    kind: msgs::JointKind::Hinge,
+                    parent: None,
+                    child: 8,
+                    frame: Some(msgs::JointFrame {
+                        body: Some(8),
+                        position: [0.0; 3],
+                        orientation: [0.0, 0.0, 0.0, 1.0],
+                    }),
+                },
+            ],
+            sensors: vec![
+                msgs::SensorInfo::Joint { name: "hoist.rope".into(), joint: "rope".into() },
+                msgs::SensorInfo::ContactSum { name: "support".into(), bodies: vec![6], with: None },
+                msgs::SensorInfo::Tension { name: "rope".into(), joint: "rope".into() },
+                msgs::SensorInfo::Cylinder { name: "lift".into(), joint: "lift".into() },
+                msgs::SensorInfo::Drum { name: "spool".into(), joint: "reel".into() },
+                msgs::SensorInfo::Joint { name: "rope.again".into(), joint: "rope".into() },
+            ],
+            ..Default::default()
+        };
+        d.validate().unwrap_or_else(|e| panic!("{e}"));
+        d
+    }
+
+    #[test]
+    fn with_a_description_force_sensors_are_classified_by_their_kind() {
+        let f = signals_frame();
+        let d = description();
+        let l = SignalLayout::new(&f, Some(&d));
+        let got: Vec<_> =
+            l.wrenches.iter().map(|w| (w.sensor.as_str(), w.kind, w.joint.as_deref())).collect();
+        assert_eq!(
+            got,
+            [
+                ("hoist.rope", WrenchKind::Joint, Some("rope")),
+                ("support", WrenchKind::ContactSum, None),
+                ("lift", WrenchKind::Cylinder, Some("lift")),
+            ]
+        );
+        assert_eq!(l.wrenches[0].channels, ch(Some([0, 1, 2]), Some([3, 4, 5])));
+        assert_eq!(l.wrenches[2].channels, [Some(13), None, None, None, None, None]);
+        let frames: Vec<String> = l.wrenches.iter().map(|w| w.frame_id("world")).collect();
+        assert_eq!(frames, ["joint/rope", "world", "joint/lift"]);
+        // The tension is no wrench though it has a joint; the drum `spool` has no channel here.
+        // A listed sensor whose channels are not those of its kind is no force sensor; one the
+        // description does not list falls back to the channel names.
+        let mut d2 = d.clone();
+        d2.sensors[0] =
+            msgs::SensorInfo::ContactSum { name: "hoist.rope".into(), bodies: vec![6], with: None };
+        d2.sensors[1] = msgs::SensorInfo::Joint { name: "other".into(), joint: "rope".into() };
+        let l2 = SignalLayout::new(&f, Some(&d2));
+        let got: Vec<_> =
+            l2.wrenches.iter().map(|w| (w.sensor.as_str(), w.kind, w.joint.as_deref())).collect();
+        assert_eq!(
+            got,
+            [
+                ("hoist.rope", WrenchKind::ContactSum, None),
+                ("support", WrenchKind::ContactSum, None),
+                ("lift", WrenchKind::Cylinder, Some("lift")),
+            ]
+        );
+        let mut d3 = d.clone();
+        d3.sensors[0] = msgs::SensorInfo::Tipping { name: "hoist.rope".into(), bodies: vec![5], touch: 0.0 };
+        assert!(SignalLayout::new(&f, Some(&d3)).wrenches.iter().all(|w| w.sensor != "hoist.rope"));
+    }
+
+    #[test]
+    fn joint_frames_go_on_tf_static_under_their_body_once_each() {
+        let d = description();
+        let scene = SceneInfo::new(d);
+        let stamp = Time { sec: 2, nanosec: 0 };
+        let t = joint_frame_transforms(&scene, stamp, "map");
+        let h = std::f64::consts::FRAC_1_SQRT_2;
+        // `rope` once (two joint sensors read it), `lift` under the world frame, `reel` for the drum.
+        assert_eq!(
+            t,
+            [
+                TransformStamped {
+                    header: Header { stamp, frame_id: "hook".into() },
+                    child_frame_id: "joint/rope".into(),
+                    transform: Transform {
+                        translation: Vector3 { x: 0.0, y: 0.0, z: 1.0 },
+                        rotation: Quaternion::from_array([0.0, h, 0.0, h]),
+                    },
+                },
+                TransformStamped {
+                    header: Header { stamp, frame_id: "map".into() },
+                    child_frame_id: "joint/lift".into(),
+                    transform: Transform {
+                        translation: Vector3 { x: 3.0, y: 0.0, z: 0.5 },
+                        rotation: Quaternion::from_array([0.0, 0.0, 0.0, 1.0]),
+                    },
+                },
+                TransformStamped {
+                    header: Header { stamp, frame_id: "drum".into() },
+                    child_frame_id: "joint/reel".into(),
+                    transform: Transform {
+                        translation: Vector3::default(),
+                        rotation: Quaternion::from_array([0.0, 0.0, 0.0, 1.0]),
+                    },
+                },
+            ]
+        );
+        // Without sensors, or without frames, no joint frames.
+        let mut d = scene.description.clone();
+        d.joints.iter_mut().for_each(|j| j.frame = None);
+        d.sensors.retain(|s| matches!(s, msgs::SensorInfo::ContactSum { .. }));
+        assert!(joint_frame_transforms(&SceneInfo::new(d), stamp, "map").is_empty());
     }
 
     #[test]
@@ -1096,7 +1354,7 @@ mod tests {
                 f.channels.push(channel(&format!("{s}/{c}"), 0.0));
             }
         }
-        let l = SignalLayout::new(&f);
+        let l = SignalLayout::new(&f, None);
         let topics: Vec<&str> = l.wrenches.iter().map(|w| w.topic.as_str()).collect();
         assert_eq!(topics, ["/pivotsim/signals/a_b", "/pivotsim/signals/a_b_2"]);
         let mut f = msgs::SignalsFrame::default();
@@ -1105,14 +1363,14 @@ mod tests {
                 f.channels.push(channel(&format!("s{i}/{c}"), 0.0));
             }
         }
-        let l = SignalLayout::new(&f);
+        let l = SignalLayout::new(&f, None);
         assert_eq!((l.wrenches.len(), l.wrenches_refused), (MAX_WRENCH_TOPICS, 6));
     }
 
     #[test]
     fn wrench_carries_the_channels_in_their_frame() {
         let f = signals_frame();
-        let l = SignalLayout::new(&f);
+        let l = SignalLayout::new(&f, None);
         let stamp = Time { sec: 1, nanosec: 500_000_000 };
         let w = wrench(&l.wrenches[0], &f, stamp, "world").unwrap();
         assert_eq!(
@@ -1139,6 +1397,37 @@ mod tests {
         // A frame of fewer channels than the layout: no wrench, no panic.
         g.channels.truncate(7);
         assert!(wrench(&l.wrenches[1], &g, stamp, "world").is_none());
+    }
+
+    #[test]
+    fn described_wrenches_are_in_the_joint_frames_and_axial_ones_along_x() {
+        let mut f = signals_frame();
+        f.channels.push(channel("spool/torque", -250.0));
+        let l = SignalLayout::new(&f, Some(&description()));
+        let stamp = Time { sec: 1, nanosec: 0 };
+        let by =
+            |n: &str| wrench(l.wrenches.iter().find(|w| w.sensor == n).unwrap(), &f, stamp, "world").unwrap();
+        let rope = by("hoist.rope");
+        assert_eq!(rope.header.frame_id, "joint/rope");
+        assert_eq!(rope.wrench.force, Vector3 { x: 1.0, y: -2.0, z: 49.05 });
+        let lift = by("lift");
+        assert_eq!(lift.header.frame_id, "joint/lift");
+        assert_eq!(
+            lift.wrench,
+            Wrench { force: Vector3 { x: 1200.0, y: 0.0, z: 0.0 }, torque: Vector3::default() }
+        );
+        let spool = by("spool");
+        assert_eq!(spool.header.frame_id, "joint/reel");
+        assert_eq!(
+            spool.wrench,
+            Wrench { force: Vector3::default(), torque: Vector3 { x: -250.0, y: 0.0, z: 0.0 } }
+        );
+        // A drum that drops out: none.
+        let last = f.channels.len() - 1;
+        f.channels[last].dropout = true;
+        f.channels[last].value = 0.0;
+        let w = l.wrenches.iter().find(|w| w.sensor == "spool").unwrap();
+        assert!(wrench(w, &f, stamp, "world").is_none());
     }
 
     #[test]

@@ -9,10 +9,11 @@
 //! - A `/joy` stream moves the driven joint; when it stops, the server's deadman trips.
 //! - Malformed `/joy` (33 axes, a NaN axis) is rejected and counted by the bridge (its
 //!   diagnostics on `/pivotsim/stats`) and never reaches the server.
-//! - The operator signals: a hanging load's joint reaction and a resting crate's support force
-//!   arrive as `WrenchStamped` equal to m·g, every channel on `/pivotsim/signals`, the crate's
-//!   contacts as arrows, a live fault as a `/rosout` line, and a malformed signals frame is
-//!   counted without stopping anything.
+//! - The operator signals: a hanging load's joint reaction arrives as a `WrenchStamped` in the
+//!   joint's frame, which `/tf_static` places under the load, and turned into the world with the
+//!   transforms it is (0, 0, m·g); a resting crate's support force arrives in `world` as m·g;
+//!   every channel on `/pivotsim/signals`, the crate's contacts as arrows, a live fault as a
+//!   `/rosout` line, and a malformed signals frame is counted without stopping anything.
 
 #![cfg(feature = "ros2")]
 
@@ -86,8 +87,8 @@ deadzone = 0.0
 "#;
 
 /// A static ground, a 10 kg crate resting on it (contact sum `support`, its contact points), and a
-/// 5 kg ball hanging 1 m below a ball joint to the world (joint sensor `hang.rope`, tension
-/// `rope`).
+/// 5 kg ball, turned, hanging 1 m below a ball joint to the world (joint sensor `hang.rope`,
+/// tension `rope`).
 const SIGRIG: &str = r#"
 [scene]
 name = "sigrig"
@@ -109,6 +110,7 @@ size = [0.5, 0.5, 0.5]
 name = "load"
 mass = 5
 position = [1.5, 0, 1]
+rotation = [30, 20, 10]
 [[body.shape]]
 type = "ball"
 radius = 0.1
@@ -660,6 +662,28 @@ fn close(a: f64, b: f64, tol: f64) -> bool {
     (a - b).abs() <= tol * b.abs()
 }
 
+/// `q v q*` for a unit quaternion `q`.
+fn rotate(q: Quaternion, v: Vector3) -> Vector3 {
+    let (u, w) = ([q.x, q.y, q.z], q.w);
+    let cross = |a: [f64; 3], b: [f64; 3]| {
+        [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
+    };
+    let v = [v.x, v.y, v.z];
+    let t = cross(u, v).map(|x| 2.0 * x);
+    let c = cross(u, t);
+    Vector3 { x: v[0] + w * t[0] + c[0], y: v[1] + w * t[1] + c[1], z: v[2] + w * t[2] + c[2] }
+}
+
+/// The quaternion product `a b`.
+fn compose(a: Quaternion, b: Quaternion) -> Quaternion {
+    Quaternion {
+        w: a.w * b.w - a.x * b.x - a.y * b.y - a.z * b.z,
+        x: a.w * b.x + a.x * b.w + a.y * b.z - a.z * b.y,
+        y: a.w * b.y - a.x * b.z + a.y * b.w + a.z * b.x,
+        z: a.w * b.z + a.x * b.y - a.y * b.x + a.z * b.w,
+    }
+}
+
 #[test]
 fn signals_reach_ros_as_wrenches_arrays_arrows_and_log_lines() {
     const G: f64 = 9.81;
@@ -683,18 +707,27 @@ fn signals_reach_ros_as_wrenches_arrays_arrows_and_log_lines() {
     let arrows_sub = subscribe::<MarkerArray>(&mut node, topics::CONTACT_MARKERS, reliable(10));
     let rosout_sub = subscribe::<Log>(&mut node, topics::ROSOUT, reliable(100));
     let stats_sub = subscribe::<DiagnosticArray>(&mut node, topics::STATS, reliable(10));
+    let tf_static_sub = subscribe::<TFMessage>(&mut node, topics::TF_STATIC, latched());
+    let tf_sub = subscribe::<TFMessage>(&mut node, topics::TF, reliable(100));
 
     // Readings after 1 s of simulation: the load hangs still and the crate rests.
     let settled = |t: Time| t.as_nanos() >= 1_000_000_000;
     let (mut rope, mut support, mut arrays, mut names, mut arrows) = (vec![], vec![], vec![], vec![], vec![]);
+    let (mut statics, mut tfs) = (vec![], vec![]);
     let deadline = Instant::now() + Duration::from_secs(30);
     let enough = |r: &[(WrenchStamped, Instant)], s: &[(WrenchStamped, Instant)]| {
         r.iter().filter(|(w, _)| settled(w.header.stamp)).count() >= 20
             && s.iter().filter(|(w, _)| settled(w.header.stamp)).count() >= 20
     };
     while Instant::now() < deadline
-        && !(enough(&rope, &support) && arrays.len() >= 20 && !names.is_empty() && arrows.len() >= 20)
+        && !(enough(&rope, &support)
+            && arrays.len() >= 20
+            && !names.is_empty()
+            && arrows.len() >= 20
+            && !statics.is_empty())
     {
+        drain(&tf_static_sub, &mut statics);
+        drain(&tf_sub, &mut tfs);
         drain(&rope_sub, &mut rope);
         drain(&support_sub, &mut support);
         drain(&array_sub, &mut arrays);
@@ -704,21 +737,66 @@ fn signals_reach_ros_as_wrenches_arrays_arrows_and_log_lines() {
     }
     assert!(enough(&rope, &support), "{} rope and {} support wrenches in 30 s", rope.len(), support.len());
     assert!(
-        arrays.len() >= 20 && !names.is_empty() && arrows.len() >= 20,
-        "{} arrays, {} name lists, {} arrow arrays",
+        arrays.len() >= 20 && !names.is_empty() && arrows.len() >= 20 && !statics.is_empty(),
+        "{} arrays, {} name lists, {} arrow arrays, {} /tf_static messages",
         arrays.len(),
         names.len(),
-        arrows.len()
+        arrows.len(),
+        statics.len()
     );
+    drain(&tf_sub, &mut tfs);
 
-    // The hanging load: the joint holds its weight, |F| = m g, in the joint's frame.
+    // The joint sensor's frame is on /tf_static, a child of the load (the joint's body `a`, its
+    // child), in one latched message with the static ground; its origin is the anchor.
+    // (Settled wrenches: before the scene description reaches the bridge, a joint sensor's frame
+    // is unknown to it.)
+    let frame_id = rope.iter().find(|(w, _)| settled(w.header.stamp)).unwrap().0.header.frame_id.clone();
+    assert_eq!(frame_id, "joint/rope");
+    let latched = &statics.last().unwrap().0;
+    let children: BTreeSet<&str> = latched.transforms.iter().map(|t| t.child_frame_id.as_str()).collect();
+    assert_eq!(children, BTreeSet::from(["ground", "joint/rope"]));
+    let joint = latched.transforms.iter().find(|t| t.child_frame_id == frame_id).unwrap();
+    assert_eq!(joint.header.frame_id, "load");
+    // The load's pose on /tf at a wrench's stamp.
+    let load_at = |stamp: Time| {
+        tfs.iter()
+            .flat_map(|(m, _): &(TFMessage, Instant)| &m.transforms)
+            .find(|t| t.child_frame_id == "load" && t.header.stamp == stamp)
+            .map(|t| t.transform)
+    };
+
+    // The hanging load: the joint holds its weight. Its wrench, turned into the world with the
+    // load's /tf transform and the joint frame's /tf_static one, is the force on the load:
+    // (0, 0, +m g), within 1e-6 relative, and no torque about the anchor.
     let (m_load, m_crate) = (5.0, 10.0);
+    let mut checked = 0;
     for (w, _) in rope.iter().filter(|(w, _)| settled(w.header.stamp)) {
-        assert_eq!(w.header.frame_id, "joint_frame/hang_rope");
+        assert_eq!(w.header.frame_id, frame_id);
         let f = w.wrench.force;
         let n = (f.x * f.x + f.y * f.y + f.z * f.z).sqrt();
         assert!(close(n, m_load * G, 1e-6), "rope |F| = {n} N, {} expected", m_load * G);
+        let Some(load) = load_at(w.header.stamp) else { continue };
+        let r = compose(load.rotation, joint.transform.rotation);
+        let fw = rotate(r, f);
+        let err = (fw.x * fw.x + fw.y * fw.y + (fw.z - m_load * G).powi(2)).sqrt();
+        assert!(
+            err <= 1e-6 * m_load * G,
+            "force on the load in the world {fw:?}, (0, 0, {}) expected",
+            m_load * G
+        );
+        let tw = rotate(r, w.wrench.torque);
+        assert!((tw.x * tw.x + tw.y * tw.y + tw.z * tw.z).sqrt() <= 1e-6 * m_load * G, "torque {tw:?}");
+        let t = joint.transform.translation;
+        let o = rotate(load.rotation, t);
+        let p = load.translation;
+        let anchor = [p.x + o.x, p.y + o.y, p.z + o.z];
+        assert!(
+            (anchor[0] - 1.5).abs() < 1e-6 && anchor[1].abs() < 1e-6 && (anchor[2] - 2.0).abs() < 1e-6,
+            "the joint frame's origin {anchor:?} is not the anchor"
+        );
+        checked += 1;
     }
+    assert!(checked >= 10, "only {checked} rope wrenches had the load's /tf transform of their stamp");
     // The resting crate: the ground pushes it up with its weight, world frame, no torque.
     for (w, _) in support.iter().filter(|(w, _)| settled(w.header.stamp)) {
         assert_eq!(w.header.frame_id, "world");

@@ -206,9 +206,17 @@ pub fn scene_schema() -> Value {
     let body = json!({"type": "object", "properties": {
         "id": int, "name": s, "kind": names(&["dynamic", "kinematic", "static"]), "mass": num,
         "colliders": {"type": "array", "items": collider}}});
+    let frame = json!({"type": "object", "properties": {
+        "body": {"type": ["integer", "null"]}, "position": nums(3), "orientation": nums(4)}});
     let joint = json!({"type": "object", "properties": {
         "name": s, "kind": names(&["fixed", "hinge", "prismatic", "ball", "other"]),
-        "parent": {"type": ["integer", "null"]}, "child": int}});
+        "parent": {"type": ["integer", "null"]}, "child": int, "frame": frame}});
+    let ints = json!({"type": "array", "items": int});
+    let sensor = json!({"type": "object", "properties": {
+        "name": s,
+        "kind": names(&["joint", "tension", "cylinder", "drum", "cable", "contact_sum", "tipping", "contacts"]),
+        "joint": s, "joints": {"type": "array", "items": s}, "bodies": ints,
+        "with": {"oneOf": [ints, {"type": "null"}]}, "touch": num}});
     let actuator = json!({"type": "object", "properties": {
         "name": s, "kind": names(&["motor", "winch"]), "joint": {"type": ["string", "null"]},
         "mode": names(&modes), "limits": {"oneOf": [nums(2), {"type": "null"}]}}});
@@ -227,6 +235,7 @@ pub fn scene_schema() -> Value {
             "joints": {"type": "array", "items": joint},
             "actuators": {"type": "array", "items": actuator},
             "joystick": {"type": "array", "items": binding},
+            "sensors": {"type": "array", "items": sensor},
         },
         "required": ["world", "scene", "timestep", "gravity", "bodies", "joints", "actuators", "joystick"],
     })
@@ -296,6 +305,11 @@ mod tests {
                 kind: msgs::JointKind::Hinge,
                 parent: None,
                 child: 1,
+                frame: Some(msgs::JointFrame {
+                    body: Some(1),
+                    position: [0.0; 3],
+                    orientation: [0.0, 0.0, 0.0, 1.0],
+                }),
             }],
             actuators: vec![msgs::ActuatorInfo {
                 name: "a".into(),
@@ -310,6 +324,7 @@ mod tests {
                 mode: msgs::ActuatorMode::Velocity,
                 scale: 1.0,
             }],
+            sensors: vec![msgs::SensorInfo::ContactSum { name: "c".into(), bodies: vec![1], with: None }],
             ..Default::default()
         };
         let v = serde_json::to_value(&scene).unwrap();
@@ -323,7 +338,17 @@ mod tests {
                 }
             }
         }
-        assert_eq!(schema["required"].as_array().unwrap().len(), v.as_object().unwrap().len());
+        let j = &v["joints"][0]["frame"];
+        for kk in j.as_object().unwrap().keys() {
+            assert!(
+                props["joints"]["items"]["properties"]["frame"]["properties"].get(kk).is_some(),
+                "frame.{kk}"
+            );
+        }
+        // Every field but the optional `sensors` is required.
+        let required = schema["required"].as_array().unwrap();
+        assert_eq!(required.len() + 1, v.as_object().unwrap().len());
+        assert!(!required.contains(&json!("sensors")));
     }
 
     #[test]

@@ -135,10 +135,57 @@ fn readme_scene_example_decodes() {
         })
         .collect();
     assert_eq!(kinds, ["box", "heightfield", "cylinder", "capsule", "convex_hull", "ball", "trimesh"]);
+    // Joint frames on the child, and the sensors.
+    let axle = s.joint("drum_axle").unwrap().frame.clone().unwrap();
+    assert_eq!((axle.body, axle.position), (Some(1), [0.0, 0.0, 2.0]));
+    let kinds: Vec<&str> = s.sensors.iter().map(|x| x.kind_name()).collect();
+    assert_eq!(kinds, ["drum", "joint", "cable", "contact_sum", "tipping", "contacts"]);
+    assert_eq!(s.sensor("hook.load").and_then(|x| x.joint()), Some("hook_mount"));
+    assert_eq!(
+        s.sensor("crate_ground"),
+        Some(&SensorInfo::ContactSum { name: "crate_ground".into(), bodies: vec![4], with: Some(vec![0]) })
+    );
     // Nullable fields may be omitted.
     let omitted = json.replace(r#", "limits": null"#, "");
     assert_ne!(omitted, json);
     assert_eq!(SceneDescription::decode(&json_frame(Kind::SceneDescription, &omitted)).unwrap(), s);
+    let with_null = json.replace(r#""with": [0]"#, r#""with": null"#);
+    let without = json.replace(r#", "with": [0]"#, "");
+    assert_ne!(without, json);
+    assert_eq!(
+        SceneDescription::decode(&json_frame(Kind::SceneDescription, &with_null)).unwrap(),
+        SceneDescription::decode(&json_frame(Kind::SceneDescription, &without)).unwrap()
+    );
+}
+
+/// A description of an older server (no joint frames, no sensors) still decodes; one without them
+/// is written without the keys, as before.
+#[test]
+fn scene_without_frames_and_sensors_decodes_as_before() {
+    let json = block_after("<!-- example:scene -->").join("\n");
+    let mut v: serde_json::Value = serde_json::from_str(&json).unwrap();
+    v.as_object_mut().unwrap().remove("sensors");
+    for j in v["joints"].as_array_mut().unwrap() {
+        j.as_object_mut().unwrap().remove("frame");
+    }
+    let old = v.to_string();
+    assert!(!old.contains("frame") && !old.contains("sensors"));
+    let s = SceneDescription::decode(&json_frame(Kind::SceneDescription, &old)).unwrap();
+    assert!(s.sensors.is_empty() && s.joints.iter().all(|j| j.frame.is_none()));
+    let full = SceneDescription::decode(&json_frame(Kind::SceneDescription, &json)).unwrap();
+    let mut stripped = full.clone();
+    stripped.sensors.clear();
+    stripped.joints.iter_mut().for_each(|j| j.frame = None);
+    assert_eq!(s, stripped);
+    let mut buf = Vec::new();
+    s.encode(&mut buf).unwrap();
+    let text = std::str::from_utf8(&buf[HEADER_LEN..]).unwrap();
+    assert!(!text.contains("\"frame\"") && !text.contains("\"sensors\""), "{text}");
+    // A joint frame without sensors, and sensors that need no frame, are fine too.
+    let mut v: serde_json::Value = serde_json::from_str(&json).unwrap();
+    v["sensors"] = serde_json::json!([{"name": "t", "kind": "tension", "joint": "cable0"}]);
+    v["joints"][1].as_object_mut().unwrap().remove("frame");
+    SceneDescription::decode(&json_frame(Kind::SceneDescription, &v.to_string())).unwrap();
 }
 
 #[test]

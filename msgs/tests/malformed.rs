@@ -508,6 +508,147 @@ fn scene_errors() {
 }
 
 #[test]
+fn scene_joint_frame_and_sensor_errors() {
+    let ok = sample_scene();
+    let check = |f: &dyn Fn(&mut SceneDescription), want: &dyn Fn(&SceneError) -> bool| {
+        let mut s = ok.clone();
+        f(&mut s);
+        let e = s.validate().unwrap_err();
+        assert!(want(&e), "unexpected {e:?}");
+        assert_eq!(s.encode(&mut Vec::new()), Err(e.clone()), "encode validates");
+        let j = serde_json::to_string(&s).unwrap();
+        match SceneDescription::decode(&json_frame(Kind::SceneDescription, &j)) {
+            Err(DecodeError::Invalid(d)) => assert_eq!(d, e),
+            Err(DecodeError::Frame(FrameError::Json { .. })) => {} // NaN serialises as null
+            other => panic!("decoder accepted invalid scene: {other:?}"),
+        }
+    };
+    let frame = |s: &SceneDescription| s.joints[0].frame.clone().unwrap();
+    let set_frame = |s: &mut SceneDescription, f: JointFrame| s.joints[0].frame = Some(f);
+    // The frame's body: the child (1) or the parent (0); the world only for a world joint.
+    for body in [Some(0), Some(1)] {
+        let mut s = ok.clone();
+        let f = JointFrame { body, ..frame(&s) };
+        set_frame(&mut s, f);
+        s.validate().unwrap();
+    }
+    check(
+        &|s| {
+            let f = JointFrame { body: None, ..frame(s) };
+            set_frame(s, f)
+        },
+        &|e| matches!(e, SceneError::FrameBody { path, body: None } if path == "joints[0].frame.body"),
+    );
+    check(
+        &|s| {
+            s.bodies.push(BodyInfo { id: 7, name: "other".into(), ..s.bodies[1].clone() });
+            let f = JointFrame { body: Some(7), ..frame(s) };
+            set_frame(s, f)
+        },
+        &|e| matches!(e, SceneError::FrameBody { body: Some(7), .. }),
+    );
+    check(
+        &|s| {
+            let f = JointFrame { orientation: [0.0, 0.0, 0.0, 2.0], ..frame(s) };
+            set_frame(s, f)
+        },
+        &|e| matches!(e, SceneError::NonUnitQuaternion { path, .. } if path == "joints[0].frame.orientation"),
+    );
+    check(
+        &|s| {
+            let f = JointFrame { position: [0.0, f64::NAN, 0.0], ..frame(s) };
+            set_frame(s, f)
+        },
+        &|e| matches!(e, SceneError::NonFinite { path } if path == "joints[0].frame.position"),
+    );
+    // Sensors: names, joints, frames, joint kinds, body lists, touch.
+    check(
+        &|s| s.sensors[1] = SensorInfo::Tension { name: "drum.torque".into(), joint: "drum_axle".into() },
+        &|e| matches!(e, SceneError::DuplicateName { path, .. } if path == "sensors[1].name"),
+    );
+    check(
+        &|s| s.sensors[0] = SensorInfo::Joint { name: "bad name".into(), joint: "drum_axle".into() },
+        &|e| matches!(e, SceneError::ActuatorName { path, .. } if path == "sensors[0].name"),
+    );
+    check(&|s| s.sensors[0] = SensorInfo::Joint { name: "x".repeat(33), joint: "drum_axle".into() }, &|e| {
+        matches!(e, SceneError::ActuatorName { .. })
+    });
+    check(
+        &|s| s.sensors[0] = SensorInfo::Joint { name: "j".into(), joint: "nope".into() },
+        &|e| matches!(e, SceneError::UnknownJoint { path, name } if path == "sensors[0].joint" && name == "nope"),
+    );
+    check(
+        &|s| s.joints[0].frame = None,
+        &|e| matches!(e, SceneError::NoJointFrame { path, name } if path == "sensors[0].joint" && name == "drum_axle"),
+    );
+    check(&|s| s.sensors[0] = SensorInfo::Cylinder { name: "c".into(), joint: "drum_axle".into() }, &|e| {
+        matches!(e, SceneError::SensorJointKind { sensor: "cylinder", joint: "hinge", .. })
+    });
+    check(
+        &|s| s.sensors[0] = SensorInfo::Cable { name: "c".into(), joints: vec![] },
+        &|e| matches!(e, SceneError::TooFew { path, count: 0, min: 1 } if path == "sensors[0].joints"),
+    );
+    check(
+        &|s| {
+            s.sensors[0] =
+                SensorInfo::Cable { name: "c".into(), joints: vec!["drum_axle".into(), "x".into()] }
+        },
+        &|e| matches!(e, SceneError::UnknownJoint { path, .. } if path == "sensors[0].joints[1]"),
+    );
+    check(
+        &|s| s.sensors[1] = SensorInfo::ContactSum { name: "base".into(), bodies: vec![1, 5], with: None },
+        &|e| matches!(e, SceneError::UnknownBody { path, id: 5 } if path == "sensors[1].bodies[1]"),
+    );
+    check(
+        &|s| {
+            s.sensors[1] =
+                SensorInfo::ContactSum { name: "base".into(), bodies: vec![1], with: Some(vec![0, 0]) }
+        },
+        &|e| matches!(e, SceneError::RepeatedBody { path, id: 0 } if path == "sensors[1].with[1]"),
+    );
+    check(
+        &|s| s.sensors[1] = SensorInfo::Contacts { name: "base".into(), bodies: vec![] },
+        &|e| matches!(e, SceneError::TooFew { path, .. } if path == "sensors[1].bodies"),
+    );
+    check(
+        &|s| s.sensors[2] = SensorInfo::Tipping { name: "lmi".into(), bodies: vec![1], touch: -0.1 },
+        &|e| matches!(e, SceneError::Negative { path, .. } if path == "sensors[2].touch"),
+    );
+    check(
+        &|s| s.sensors[2] = SensorInfo::Tipping { name: "lmi".into(), bodies: vec![1], touch: f64::INFINITY },
+        &|e| matches!(e, SceneError::NonFinite { path } if path == "sensors[2].touch"),
+    );
+    check(
+        &|s| {
+            s.sensors = (0..=MAX_SCENE_SENSORS)
+                .map(|i| SensorInfo::Tension { name: format!("t{i}"), joint: "drum_axle".into() })
+                .collect()
+        },
+        &|e| matches!(e, SceneError::TooMany { path, max: MAX_SCENE_SENSORS, .. } if path == "sensors"),
+    );
+}
+
+#[test]
+fn scene_sensor_schema_errors() {
+    let bad = |edit: &dyn Fn(&mut serde_json::Value)| {
+        let mut j = serde_json::to_value(sample_scene()).unwrap();
+        edit(&mut j);
+        let b = json_frame(Kind::SceneDescription, &j.to_string());
+        let r = SceneDescription::decode(&b);
+        assert!(matches!(r, Err(DecodeError::Frame(FrameError::Json { .. }))), "{j}: {r:?}");
+    };
+    bad(&|j| j["sensors"][0]["kind"] = "thermometer".into());
+    bad(&|j| j["sensors"][0]["bodies"] = serde_json::json!([1])); // not a field of a drum sensor
+    bad(&|j| {
+        j["sensors"][0].as_object_mut().unwrap().remove("joint");
+    });
+    bad(&|j| j["joints"][0]["frame"]["axis"] = serde_json::json!([1.0, 0.0, 0.0]));
+    bad(&|j| {
+        j["joints"][0]["frame"].as_object_mut().unwrap().remove("orientation");
+    });
+}
+
+#[test]
 fn scene_json_schema_errors() {
     let mut j = serde_json::to_value(sample_scene()).unwrap();
     j["bodies"][0]["colliders"][0]["shape"]["type"] = "torus".into();

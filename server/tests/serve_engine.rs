@@ -7,6 +7,7 @@
 
 use std::time::{Duration, Instant};
 
+use nalgebra::{Quaternion, UnitQuaternion, Vector3};
 use pivotsim_msgs as msgs;
 use pivotsim_server::serve::Engine;
 use pivotsim_tests::temp_file;
@@ -315,6 +316,13 @@ fn every_builtin_scene_has_a_valid_description_and_pose_frame() {
         d.validate().unwrap();
         assert_eq!(d.bodies.len(), e.scene().world.bodies().len());
         assert_eq!(d.actuators.len(), e.scene().controls.actuators().len());
+        // Every joint's frame on its child (body A), every sensor in the scene's order.
+        for j in &d.joints {
+            assert_eq!(j.frame.as_ref().and_then(|f| f.body), Some(j.child), "{}: {}", s.name, j.name);
+        }
+        let sensors: Vec<&str> = e.scene().signals.sensors().iter().map(|x| x.name.as_str()).collect();
+        let described: Vec<&str> = d.sensors.iter().map(|x| x.name()).collect();
+        assert_eq!(described, sensors, "{}", s.name);
         e.tick(Instant::now());
         let f = msgs::PoseFrame::decode(e.pose_frame()).unwrap();
         assert_eq!(f.bodies.len(), d.bodies.len());
@@ -360,4 +368,129 @@ fn overrides_and_the_solve_budget_reach_the_world_and_the_stats() {
         Engine::with_settings("forklift", world, DEADMAN, &bad, None),
         Err(pivotsim_server::scene::SceneError::Override { .. })
     ));
+}
+
+/// A rotated 5 kg load hanging from an inclined hinge on a static beam, a 10 kg crate resting on
+/// the ground, and one sensor of each body-set kind.
+const FRAMES: &str = r#"
+[scene]
+name = "frames"
+[[body]]
+name = "ground"
+kind = "static"
+[[body.shape]]
+type = "box"
+size = [4, 4, 0.2]
+[[body]]
+name = "crate"
+mass = 10
+position = [0, 0, 0.35]
+[[body.shape]]
+type = "box"
+size = [0.5, 0.5, 0.5]
+[[body]]
+name = "beam"
+kind = "static"
+position = [2, 0, 3.3]
+[[body.shape]]
+type = "box"
+size = [0.2, 0.2, 0.2]
+[[body]]
+name = "load"
+mass = 5
+inertia = [0.1, 0.2, 0.3]
+position = [2, 0, 2]
+rotation = [30, 20, 10]
+[[body.shape]]
+type = "ball"
+radius = 0.1
+[[joint]]
+name = "pin"
+type = "hinge"
+a = "load"
+b = "beam"
+anchor = [2, 0, 3]
+axis = [0, 0.6, 0.8]
+[[sensor]]
+name = "pin.reaction"
+type = "joint"
+joint = "pin"
+[[sensor]]
+name = "pin_t"
+type = "tension"
+joint = "pin"
+[[sensor]]
+name = "support"
+type = "contact_sum"
+bodies = ["crate"]
+with = ["ground"]
+[[sensor]]
+name = "lmi"
+type = "tipping"
+bodies = ["*"]
+[[sensor]]
+name = "touching"
+type = "contacts"
+bodies = ["crate"]
+"#;
+
+/// The description carries each joint's frame on its child and every sensor with what it reads;
+/// a joint sensor's channels, turned into the world with that frame (the child's pose times the
+/// frame), are the joint's force on the child: a hanging load's weight upwards, (0, 0, m g).
+#[test]
+fn the_description_gives_the_frame_a_joint_sensor_reports_in() {
+    let path = temp_file("serve-engine-frames.toml", FRAMES).display().to_string();
+    let mut e = engine(&path);
+    let d = msgs::SceneDescription::decode(e.description()).unwrap();
+    let id = |n: &str| d.bodies.iter().find(|b| b.name == n).unwrap().id;
+    let pin = d.joint("pin").unwrap();
+    assert_eq!((pin.parent, pin.child), (Some(id("beam")), id("load")));
+    let frame = pin.frame.clone().unwrap();
+    assert_eq!(frame.body, Some(id("load")));
+    // The anchor is 1 m above the load's centre of mass: in the load's (rotated) frame.
+    let q = |o: [f64; 4]| UnitQuaternion::from_quaternion(Quaternion::new(o[3], o[0], o[1], o[2]));
+    let p0 = msgs::PoseFrame::decode(e.pose_frame()).unwrap();
+    let load0 = p0.bodies.iter().find(|b| b.id == id("load")).unwrap();
+    let anchor = Vector3::from(load0.position) + q(load0.orientation) * Vector3::from(frame.position);
+    assert!((anchor - Vector3::new(2.0, 0.0, 3.0)).norm() < 1e-12, "anchor {anchor}");
+    // x of the joint frame is the hinge axis.
+    let x = q(load0.orientation) * q(frame.orientation) * Vector3::x();
+    assert!((x - Vector3::new(0.0, 0.6, 0.8)).norm() < 1e-12, "x {x}");
+    assert_eq!(
+        d.sensors,
+        [
+            msgs::SensorInfo::Joint { name: "pin.reaction".into(), joint: "pin".into() },
+            msgs::SensorInfo::Tension { name: "pin_t".into(), joint: "pin".into() },
+            msgs::SensorInfo::ContactSum {
+                name: "support".into(),
+                bodies: vec![id("crate")],
+                with: Some(vec![id("ground")])
+            },
+            msgs::SensorInfo::Tipping {
+                name: "lmi".into(),
+                bodies: vec![id("crate"), id("load")],
+                touch: pivotsim_server::scene::DEFAULT_TOUCH
+            },
+            msgs::SensorInfo::Contacts { name: "touching".into(), bodies: vec![id("crate")] },
+        ]
+    );
+    // After 1 s the load hangs still: the channels in the frame, turned into the world.
+    let t0 = Instant::now();
+    for _ in 0..60 {
+        assert!(e.tick(t0));
+    }
+    let signals = msgs::SignalsFrame::decode(e.signals_frame()).unwrap();
+    let pose = msgs::PoseFrame::decode(e.pose_frame()).unwrap();
+    assert_eq!(signals.sequence, pose.sequence);
+    let ch = |n: &str| signals.channels.iter().find(|c| c.name.as_str() == n).unwrap().value;
+    let f = Vector3::new(ch("pin.reaction/fx"), ch("pin.reaction/fy"), ch("pin.reaction/fz"));
+    let t = Vector3::new(ch("pin.reaction/tx"), ch("pin.reaction/ty"), ch("pin.reaction/tz"));
+    let load = pose.bodies.iter().find(|b| b.id == id("load")).unwrap();
+    let r = q(load.orientation) * q(frame.orientation);
+    let (fw, tw) = (r * f, r * t);
+    let w = 5.0 * 9.81;
+    assert!((fw - Vector3::new(0.0, 0.0, w)).norm() <= 1e-6 * w, "force on the load in the world {fw}");
+    assert!(tw.norm() <= 1e-6 * w, "torque about the anchor {tw}");
+    assert!((ch("pin_t/tension") - w).abs() <= 1e-6 * w);
+    assert!((ch("support/fz") - 10.0 * 9.81).abs() <= 1e-6 * 98.1);
 }

@@ -174,6 +174,50 @@ pub enum SceneError {
         /// Upper limit.
         hi: f64,
     },
+    /// A joint frame on a body that is neither the joint's child nor its parent (`null`, the
+    /// world, only when the parent is the world).
+    #[error("{path}: body {body:?} is neither the joint's child nor its parent")]
+    FrameBody {
+        /// Where.
+        path: String,
+        /// The frame's body (`None`: the world).
+        body: Option<u32>,
+    },
+    /// A sensor whose joint has no `frame` (joint, cylinder and drum sensors report in it).
+    #[error("{path}: joint {name:?} has no frame")]
+    NoJointFrame {
+        /// Where.
+        path: String,
+        /// The joint.
+        name: String,
+    },
+    /// A cylinder sensor on a joint that is not prismatic (or `other`), a drum sensor on one that
+    /// is not a hinge (or `other`).
+    #[error("{path}: a {sensor} sensor cannot read a {joint} joint")]
+    SensorJointKind {
+        /// Where.
+        path: String,
+        /// The sensor's kind.
+        sensor: &'static str,
+        /// The joint's kind.
+        joint: &'static str,
+    },
+    /// A body listed twice in one sensor's body list.
+    #[error("{path}: body id {id} appears twice")]
+    RepeatedBody {
+        /// Where.
+        path: String,
+        /// The id.
+        id: u32,
+    },
+    /// A negative value where ≥ 0 is required.
+    #[error("{path}: {value} is negative")]
+    Negative {
+        /// Where.
+        path: String,
+        /// The value.
+        value: f64,
+    },
     /// The encoded payload exceeds the 16 MiB frame (encode only).
     #[error("encoded scene of {len} bytes exceeds the maximum frame")]
     TooLarge {

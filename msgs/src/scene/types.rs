@@ -36,6 +36,8 @@ pub const MAX_HEIGHTFIELD_SAMPLES: usize = 262_144;
 pub const MAX_MESH_VERTICES: usize = 65_536;
 /// Most inline triangle-mesh triangles.
 pub const MAX_MESH_TRIANGLES: usize = 131_072;
+/// Most sensors (a signals frame has at most 4096 channels).
+pub const MAX_SCENE_SENSORS: usize = 4096;
 
 /// Everything a renderer needs about a world.
 #[derive(Debug, Clone, PartialEq, Default, serde::Serialize, serde::Deserialize)]
@@ -57,6 +59,10 @@ pub struct SceneDescription {
     pub actuators: Vec<ActuatorInfo>,
     /// Default joystick mapping.
     pub joystick: Vec<JoystickBinding>,
+    /// Sensors (the scene's `[[sensor]]`s, in the order of their channels in the signals frames);
+    /// names unique. Optional: absent (and not written) when empty.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub sensors: Vec<SensorInfo>,
 }
 
 /// How a body moves.
@@ -205,6 +211,137 @@ pub struct JointInfo {
     pub parent: Option<u32>,
     /// Child body id (≠ parent).
     pub child: u32,
+    /// The joint's frame, in which the server expresses the joint's reaction (joint, cylinder and
+    /// drum sensors). Optional: absent (and not written) when unknown.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub frame: Option<JointFrame>,
+}
+
+/// A joint frame fixed on a body: origin at the joint's anchor, x = the joint axis (for joints
+/// without an axis, such as ball joints, a fixed direction the scene chose).
+///
+/// The pivotsim server puts it on the child (the joint's body A): the frame in which its joint
+/// sensors report the joint's force and torque on the child, torque about the anchor.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct JointFrame {
+    /// The body the frame is fixed on: the joint's `child` or `parent` id, or `null` for the world
+    /// (only when `parent` is `null`).
+    pub body: Option<u32>,
+    /// Origin (the anchor) in the body frame (m).
+    pub position: [f64; 3],
+    /// Rotation joint frame → body frame, unit quaternion `[x, y, z, w]`.
+    pub orientation: [f64; 4],
+}
+
+/// One sensor of the scene (`[[sensor]]` of a scene file): its name (its channels are
+/// `{name}/{channel}` in the signals frames), what it measures and the joints or bodies it reads.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
+pub enum SensorInfo {
+    /// `fx fy fz tx ty tz`: the joint's force and torque on its frame's body, torque about the
+    /// anchor, in the joint's `frame`.
+    Joint {
+        /// Name (channel name rules: 1..=32 bytes of `[A-Za-z0-9_.\-/]`).
+        name: String,
+        /// The joint (in `joints`, with a `frame`).
+        joint: String,
+    },
+    /// `tension`: the magnitude of the joint's force (no direction).
+    Tension {
+        /// Name.
+        name: String,
+        /// The joint (in `joints`).
+        joint: String,
+    },
+    /// `force`: the x component (along the axis) of the joint's force in its `frame`.
+    Cylinder {
+        /// Name.
+        name: String,
+        /// The joint (in `joints`, `prismatic` or `other`, with a `frame`).
+        joint: String,
+    },
+    /// `torque`: the x component (about the axis) of the joint's torque in its `frame`.
+    Drum {
+        /// Name.
+        name: String,
+        /// The joint (in `joints`, `hinge` or `other`, with a `frame`).
+        joint: String,
+    },
+    /// `0 … n`, `hook`, `max`: the force magnitudes at a cable's joints, top first.
+    Cable {
+        /// Name.
+        name: String,
+        /// The cable's joints, top first (in `joints`; at least one).
+        joints: Vec<String>,
+    },
+    /// `fx fy fz` (world frame) and magnitudes and counts: the contact force on `bodies` from
+    /// `with` (`null`: every other body).
+    ContactSum {
+        /// Name.
+        name: String,
+        /// The bodies measured (ids, at least one, no repeats).
+        bodies: Vec<u32>,
+        /// What they touch (ids, at least one, no repeats), or `null`.
+        with: Option<Vec<u32>>,
+    },
+    /// `distance percent supports stabilizing overturning`: the tipping margin of a machine.
+    Tipping {
+        /// Name.
+        name: String,
+        /// The machine with its load (ids, at least one, no repeats).
+        bodies: Vec<u32>,
+        /// Contacts closer than this count as support (m, ≥ 0).
+        touch: f64,
+    },
+    /// No channels: the contact records of the points touching `bodies`.
+    Contacts {
+        /// Name.
+        name: String,
+        /// The bodies watched (ids, at least one, no repeats).
+        bodies: Vec<u32>,
+    },
+}
+
+impl SensorInfo {
+    /// Its name.
+    pub fn name(&self) -> &str {
+        match self {
+            SensorInfo::Joint { name, .. }
+            | SensorInfo::Tension { name, .. }
+            | SensorInfo::Cylinder { name, .. }
+            | SensorInfo::Drum { name, .. }
+            | SensorInfo::Cable { name, .. }
+            | SensorInfo::ContactSum { name, .. }
+            | SensorInfo::Tipping { name, .. }
+            | SensorInfo::Contacts { name, .. } => name,
+        }
+    }
+
+    /// Its `kind` as on the wire (`joint`, `contact_sum`, …).
+    pub fn kind_name(&self) -> &'static str {
+        match self {
+            SensorInfo::Joint { .. } => "joint",
+            SensorInfo::Tension { .. } => "tension",
+            SensorInfo::Cylinder { .. } => "cylinder",
+            SensorInfo::Drum { .. } => "drum",
+            SensorInfo::Cable { .. } => "cable",
+            SensorInfo::ContactSum { .. } => "contact_sum",
+            SensorInfo::Tipping { .. } => "tipping",
+            SensorInfo::Contacts { .. } => "contacts",
+        }
+    }
+
+    /// The one joint a joint, tension, cylinder or drum sensor reads.
+    pub fn joint(&self) -> Option<&str> {
+        match self {
+            SensorInfo::Joint { joint, .. }
+            | SensorInfo::Tension { joint, .. }
+            | SensorInfo::Cylinder { joint, .. }
+            | SensorInfo::Drum { joint, .. } => Some(joint),
+            _ => None,
+        }
+    }
 }
 
 /// What an actuator drives.
@@ -276,6 +413,16 @@ impl SceneDescription {
     /// The body with id `id`.
     pub fn body(&self, id: u32) -> Option<&BodyInfo> {
         self.bodies.iter().find(|b| b.id == id)
+    }
+
+    /// The joint named `name`.
+    pub fn joint(&self, name: &str) -> Option<&JointInfo> {
+        self.joints.iter().find(|j| j.name == name)
+    }
+
+    /// The sensor named `name`.
+    pub fn sensor(&self, name: &str) -> Option<&SensorInfo> {
+        self.sensors.iter().find(|s| s.name() == name)
     }
 
     /// The actuator named `name`.

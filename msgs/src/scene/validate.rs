@@ -176,6 +176,12 @@ impl SceneDescription {
             if j.parent == Some(j.child) {
                 return Err(SceneError::SelfJoint { path: p });
             }
+            if let Some(f) = &j.frame {
+                if f.body != Some(j.child) && f.body != j.parent {
+                    return Err(SceneError::FrameBody { path: format!("{p}.frame.body"), body: f.body });
+                }
+                pose(&format!("{p}.frame"), &f.position, &f.orientation)?;
+            }
         }
 
         let mut actuators = HashSet::with_capacity(self.actuators.len());
@@ -212,6 +218,100 @@ impl SceneDescription {
             }
             finite(|| format!("{p}.scale"), &[b.scale])?;
         }
+        self.validate_sensors(&ids)
+    }
+
+    /// The sensors: names, the joints and bodies they name, their joints' frames and kinds.
+    fn validate_sensors(&self, ids: &HashSet<u32>) -> Result<(), SceneError> {
+        at_most(|| "sensors".into(), self.sensors.len(), MAX_SCENE_SENSORS)?;
+        let mut names = HashSet::with_capacity(self.sensors.len());
+        for (i, s) in self.sensors.iter().enumerate() {
+            let p = format!("sensors[{i}]");
+            validate_actuator_name(s.name())
+                .map_err(|source| SceneError::ActuatorName { path: format!("{p}.name"), source })?;
+            unique(&mut names, s.name(), || format!("{p}.name"))?;
+            let joint = |path: String, name: &str| {
+                self.joint(name).ok_or_else(|| SceneError::UnknownJoint { path, name: name.to_owned() })
+            };
+            match s {
+                SensorInfo::Joint { joint: j, .. }
+                | SensorInfo::Cylinder { joint: j, .. }
+                | SensorInfo::Drum { joint: j, .. } => {
+                    let info = joint(format!("{p}.joint"), j)?;
+                    if info.frame.is_none() {
+                        return Err(SceneError::NoJointFrame { path: format!("{p}.joint"), name: j.clone() });
+                    }
+                    let fits = match s {
+                        SensorInfo::Cylinder { .. } => {
+                            matches!(info.kind, JointKind::Prismatic | JointKind::Other)
+                        }
+                        SensorInfo::Drum { .. } => matches!(info.kind, JointKind::Hinge | JointKind::Other),
+                        _ => true,
+                    };
+                    if !fits {
+                        return Err(SceneError::SensorJointKind {
+                            path: format!("{p}.joint"),
+                            sensor: s.kind_name(),
+                            joint: joint_kind_name(info.kind),
+                        });
+                    }
+                }
+                SensorInfo::Tension { joint: j, .. } => {
+                    joint(format!("{p}.joint"), j)?;
+                }
+                SensorInfo::Cable { joints, .. } => {
+                    at_most(|| format!("{p}.joints"), joints.len(), MAX_SCENE_JOINTS)?;
+                    if joints.is_empty() {
+                        return Err(SceneError::TooFew { path: format!("{p}.joints"), count: 0, min: 1 });
+                    }
+                    for (k, j) in joints.iter().enumerate() {
+                        joint(format!("{p}.joints[{k}]"), j)?;
+                    }
+                }
+                SensorInfo::ContactSum { bodies, with, .. } => {
+                    body_list(&format!("{p}.bodies"), bodies, ids)?;
+                    if let Some(w) = with {
+                        body_list(&format!("{p}.with"), w, ids)?;
+                    }
+                }
+                SensorInfo::Tipping { bodies, touch, .. } => {
+                    body_list(&format!("{p}.bodies"), bodies, ids)?;
+                    finite(|| format!("{p}.touch"), &[*touch])?;
+                    if *touch < 0.0 {
+                        return Err(SceneError::Negative { path: format!("{p}.touch"), value: *touch });
+                    }
+                }
+                SensorInfo::Contacts { bodies, .. } => body_list(&format!("{p}.bodies"), bodies, ids)?,
+            }
+        }
         Ok(())
     }
+}
+
+fn joint_kind_name(k: JointKind) -> &'static str {
+    match k {
+        JointKind::Fixed => "fixed",
+        JointKind::Hinge => "hinge",
+        JointKind::Prismatic => "prismatic",
+        JointKind::Ball => "ball",
+        JointKind::Other => "other",
+    }
+}
+
+/// A sensor's body list: 1..=65 535 ids of `bodies`, none twice.
+fn body_list(path: &str, list: &[u32], ids: &HashSet<u32>) -> Result<(), SceneError> {
+    at_most(|| path.to_owned(), list.len(), MAX_SCENE_BODIES)?;
+    if list.is_empty() {
+        return Err(SceneError::TooFew { path: path.to_owned(), count: 0, min: 1 });
+    }
+    let mut seen = HashSet::with_capacity(list.len());
+    for (k, &id) in list.iter().enumerate() {
+        if !ids.contains(&id) {
+            return Err(SceneError::UnknownBody { path: format!("{path}[{k}]"), id });
+        }
+        if !seen.insert(id) {
+            return Err(SceneError::RepeatedBody { path: format!("{path}[{k}]"), id });
+        }
+    }
+    Ok(())
 }

@@ -320,6 +320,16 @@ pub fn scene() -> impl Strategy<Value = SceneDescription> {
                     kind: kinds[i % kinds.len()],
                     parent: if world || i == 0 { None } else { Some(bodies[parent.index(i)].id) },
                     child: bodies[i].id,
+                    frame: (i % 2 == 0).then(|| JointFrame {
+                        body: Some(bodies[i].id),
+                        position: [0.5, -0.25, 1.0],
+                        orientation: [
+                            0.0,
+                            0.0,
+                            std::f64::consts::FRAC_1_SQRT_2,
+                            std::f64::consts::FRAC_1_SQRT_2,
+                        ],
+                    }),
                 })
                 .collect();
             let actuators: Vec<ActuatorInfo> = actuators
@@ -346,6 +356,15 @@ pub fn scene() -> impl Strategy<Value = SceneDescription> {
                     })
                     .collect()
             };
+            let mut sensors = vec![SensorInfo::ContactSum {
+                name: "sum".into(),
+                bodies: vec![bodies[0].id],
+                with: (bodies.len() > 1).then(|| vec![bodies[1].id]),
+            }];
+            if let Some(j) = joints.first() {
+                sensors.push(SensorInfo::Joint { name: "j0.reaction".into(), joint: j.name.clone() });
+                sensors.push(SensorInfo::Cable { name: "rope".into(), joints: vec![j.name.clone()] });
+            }
             SceneDescription {
                 world: "test_world-1".into(),
                 scene: "scenes/test.toml".into(),
@@ -355,6 +374,7 @@ pub fn scene() -> impl Strategy<Value = SceneDescription> {
                 joints,
                 actuators,
                 joystick,
+                sensors,
             }
         })
 }
@@ -430,6 +450,11 @@ pub fn sample_scene() -> SceneDescription {
             kind: JointKind::Hinge,
             parent: Some(0),
             child: 1,
+            frame: Some(JointFrame {
+                body: Some(1),
+                position: [0.0, 0.0, 0.5],
+                orientation: [0.0, 0.0, 0.0, 1.0],
+            }),
         }],
         actuators: vec![
             ActuatorInfo {
@@ -453,6 +478,11 @@ pub fn sample_scene() -> SceneDescription {
             mode: ActuatorMode::Velocity,
             scale: 2.0,
         }],
+        sensors: vec![
+            SensorInfo::Drum { name: "drum.torque".into(), joint: "drum_axle".into() },
+            SensorInfo::ContactSum { name: "base".into(), bodies: vec![1], with: Some(vec![0]) },
+            SensorInfo::Tipping { name: "lmi".into(), bodies: vec![1], touch: 0.001 },
+        ],
     }
 }
 

@@ -379,6 +379,8 @@ pub(crate) struct SensorDef {
     pub joint: Option<String>,
     pub cable: Option<String>,
     pub bodies: Option<Vec<String>>,
+    /// Bodies left out of `bodies = ["*"]`.
+    pub exclude: Option<Vec<String>>,
     pub with: Option<Vec<String>>,
     pub touch: Option<f64>,
 }

@@ -78,13 +78,33 @@ fn body_set(
     span: &Range<usize>,
     field: &str,
     names: &[String],
+    exclude: Option<&[String]>,
 ) -> R<BodySet> {
     if names.is_empty() {
         return Err(src.invalid(span, field, "name at least one body"));
     }
-    if names.len() == 1 && names[0] == "*" {
-        // Every body that can move: a whole machine with its load.
-        let ids: Vec<BodyId> = world.bodies().iter().filter(|b| b.is_dynamic()).map(|b| b.id()).collect();
+    let all = names.len() == 1 && names[0] == "*";
+    if let Some(ex) = exclude {
+        if !all {
+            return Err(src.invalid(
+                span,
+                "exclude",
+                format!("`exclude` applies to `{field} = [\"*\"]` only"),
+            ));
+        }
+        if let Some(n) = ex.iter().find(|n| world.body_id(n).is_none()) {
+            return Err(src.invalid(span, "exclude", format!("no body named `{n}`")));
+        }
+    }
+    if all {
+        // Every body that can move: a whole machine with its load, but for the bodies excluded
+        // (a load resting on the ground, another machine).
+        let out = |b: &crate::dynamics::RigidBody| exclude.is_some_and(|ex| ex.iter().any(|n| n == b.name()));
+        let ids: Vec<BodyId> =
+            world.bodies().iter().filter(|b| b.is_dynamic() && !out(b)).map(|b| b.id()).collect();
+        if ids.is_empty() {
+            return Err(src.invalid(span, "exclude", "no dynamic body is left"));
+        }
         return Ok(BodySet::new(world.bodies().len(), &ids));
     }
     let ids = names
@@ -117,32 +137,34 @@ fn sensor_kind(src: &Source<'_>, world: &World, span: &Range<usize>, d: &SensorD
         }
         Ok(id)
     };
-    let bodies = |f: &str| body_set(src, world, span, f, d.bodies.as_deref().unwrap_or(&[]));
+    let bodies =
+        |f: &str| body_set(src, world, span, f, d.bodies.as_deref().unwrap_or(&[]), d.exclude.as_deref());
     let unused = |fields: &[(&str, bool)]| match fields.iter().find(|(_, set)| *set) {
         Some((f, _)) => Err(src.invalid(span, f, format!("`{f}` does not apply to a {} sensor", d.kind))),
         None => Ok(()),
     };
     let (j, c, b, w, t) =
         (d.joint.is_some(), d.cable.is_some(), d.bodies.is_some(), d.with.is_some(), d.touch.is_some());
+    let x = d.exclude.is_some();
     Ok(match d.kind.as_str() {
         "joint" => {
-            unused(&[("cable", c), ("bodies", b), ("with", w), ("touch", t)])?;
+            unused(&[("cable", c), ("bodies", b), ("exclude", x), ("with", w), ("touch", t)])?;
             SensorKind::Joint { joint: joint(&[])? }
         }
         "cylinder" => {
-            unused(&[("cable", c), ("bodies", b), ("with", w), ("touch", t)])?;
+            unused(&[("cable", c), ("bodies", b), ("exclude", x), ("with", w), ("touch", t)])?;
             SensorKind::Cylinder { joint: joint(&[JointKind::Prismatic, JointKind::Cylindrical])? }
         }
         "tension" => {
-            unused(&[("cable", c), ("bodies", b), ("with", w), ("touch", t)])?;
+            unused(&[("cable", c), ("bodies", b), ("exclude", x), ("with", w), ("touch", t)])?;
             SensorKind::Tension { joint: joint(&[])? }
         }
         "drum" => {
-            unused(&[("cable", c), ("bodies", b), ("with", w), ("touch", t)])?;
+            unused(&[("cable", c), ("bodies", b), ("exclude", x), ("with", w), ("touch", t)])?;
             SensorKind::Drum { joint: joint(&[JointKind::Hinge, JointKind::Cylindrical])? }
         }
         "cable" => {
-            unused(&[("joint", j), ("bodies", b), ("with", w), ("touch", t)])?;
+            unused(&[("joint", j), ("bodies", b), ("exclude", x), ("with", w), ("touch", t)])?;
             let n = need(&d.cable, "cable")?;
             let mut joints: Vec<_> = world.joint_id(&format!("{n}/start")).into_iter().collect();
             joints.extend((1..).map_while(|i| world.joint_id(&format!("{n}/{i}"))));
@@ -155,7 +177,7 @@ fn sensor_kind(src: &Source<'_>, world: &World, span: &Range<usize>, d: &SensorD
         "contact_sum" => {
             unused(&[("joint", j), ("cable", c), ("touch", t)])?;
             let with = match &d.with {
-                Some(names) => Some(body_set(src, world, span, "with", names)?),
+                Some(names) => Some(body_set(src, world, span, "with", names, None)?),
                 None => None,
             };
             SensorKind::ContactSum { bodies: bodies("bodies")?, with }

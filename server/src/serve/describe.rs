@@ -1,6 +1,7 @@
 //! The scene description a renderer or console needs ([`SceneDescription`](pivotsim_msgs::SceneDescription) of `pivotsim-msgs`),
-//! built from a loaded scene: bodies with their shapes, the joint tree, the actuators in wire
-//! units and the default joystick bindings.
+//! built from a loaded scene: bodies with their shapes, the joint tree with each joint's frame on
+//! its body A (the child; the frame its joint sensors report in), the actuators in wire units, the
+//! default joystick bindings and the sensors.
 //!
 //! Wire units: an actuator's value `u` (scene units, e.g. a stick deflection in `[−1, 1]`) is
 //! `s₁ · u` on the wire (`s₁` the scale of its first joint: rad/s, m/s, rad or m); brakes and
@@ -12,6 +13,7 @@ use pivotsim_msgs as msgs;
 
 use crate::dynamics::{BodyKind, JointKind, Shape, World};
 use crate::scene::{ActuatorKind, AxisMode, ButtonAction, Scene};
+use crate::signals::{BodySet, SensorKind};
 
 /// Half thickness of the slab that stands for a half-space.
 const SLAB_HALF: f64 = 0.005;
@@ -92,6 +94,7 @@ pub fn describe(scene: &Scene, world_name: &str) -> msgs::SceneDescription {
         joints: joint_infos(w),
         actuators: actuator_infos(scene),
         joystick: joystick_bindings(scene),
+        sensors: sensor_infos(scene),
     }
 }
 
@@ -134,6 +137,43 @@ fn joint_infos(w: &World) -> Vec<msgs::JointInfo> {
             },
             parent: j.body_b().map(|b| b.0),
             child: j.body_a().0,
+            // The joint sensors report the reaction on A in A's joint frame (`crate::signals`).
+            frame: Some(msgs::JointFrame {
+                body: Some(j.body_a().0),
+                position: j.frame_a().translation.vector.into(),
+                orientation: quat_xyzw(&j.frame_a().rotation),
+            }),
+        })
+        .collect()
+}
+
+/// Every sensor with what it reads: joints by name, body sets as ids (`["*"]` resolved).
+fn sensor_infos(scene: &Scene) -> Vec<msgs::SensorInfo> {
+    let w: &World = &scene.world;
+    let joint = |id| w.joint(id).map(|j| j.name().to_string()).unwrap_or_default();
+    let ids = |set: &BodySet| set.members().map(|b| b.0).collect::<Vec<u32>>();
+    scene
+        .signals
+        .sensors()
+        .iter()
+        .map(|s| {
+            let name = s.name.clone();
+            match &s.kind {
+                SensorKind::Joint { joint: j } => msgs::SensorInfo::Joint { name, joint: joint(*j) },
+                SensorKind::Tension { joint: j } => msgs::SensorInfo::Tension { name, joint: joint(*j) },
+                SensorKind::Cylinder { joint: j } => msgs::SensorInfo::Cylinder { name, joint: joint(*j) },
+                SensorKind::Drum { joint: j } => msgs::SensorInfo::Drum { name, joint: joint(*j) },
+                SensorKind::Cable { joints } => {
+                    msgs::SensorInfo::Cable { name, joints: joints.iter().map(|j| joint(*j)).collect() }
+                }
+                SensorKind::ContactSum { bodies, with } => {
+                    msgs::SensorInfo::ContactSum { name, bodies: ids(bodies), with: with.as_ref().map(ids) }
+                }
+                SensorKind::Tipping { bodies, touch } => {
+                    msgs::SensorInfo::Tipping { name, bodies: ids(bodies), touch: *touch }
+                }
+                SensorKind::Contacts { bodies } => msgs::SensorInfo::Contacts { name, bodies: ids(bodies) },
+            }
         })
         .collect()
 }
