@@ -204,10 +204,13 @@ impl Solver {
         let (wd, wc, wf) = self.opts.auto_weights;
         let l0_cost = if self.l0_valid { 0.0 } else { wf * self.env.cost_factor_from(0) };
         let end = self.free_end();
-        // (a) deletions from L₀.
+        // (a) deletions from L₀ (each skips the columns of the other tight indices).
         let tmin = self.tight.iter().position(|&t| t).unwrap_or(m);
-        let del_all: f64 =
-            (0..m).filter(|&i| self.tight[i]).map(|i| self.env.cost_delete_before(i, end)).sum();
+        self.env.free_column_sums(&self.tight, &mut self.free_sums);
+        let del_all: f64 = (0..m)
+            .filter(|&i| self.tight[i])
+            .map(|i| self.env.cost_delete_pending(i, end, &self.free_sums))
+            .sum();
         let lmin = if self.l_valid { self.tight_l.iter().position(|&t| t).unwrap_or(m) } else { 0 };
         let cost_a = l0_cost
             + wc * self.env.cost_copy_from(self.env.first_column_of_row(tmin.min(lmin)))
@@ -217,7 +220,7 @@ impl Solver {
         let cost_b = if grew {
             wd * (0..m)
                 .filter(|&i| self.tight[i] && !self.tight_l[i])
-                .map(|i| self.env.cost_delete_before(i, end))
+                .map(|i| self.env.cost_delete_pending(i, end, &self.free_sums))
                 .sum::<f64>()
         } else {
             f64::INFINITY
@@ -231,7 +234,7 @@ impl Solver {
             let t = Instant::now();
             for i in 0..m {
                 if self.tight[i] && !self.tight_l[i] {
-                    self.env.delete_before(&mut self.l, i, &mut self.sigma, end);
+                    self.env.delete_pending(&mut self.l, i, &mut self.sigma, end, &self.tight);
                     self.stats.deletions += 1;
                 }
             }
@@ -271,7 +274,7 @@ impl Solver {
         let end = self.free_end();
         for i in tmin..m {
             if self.tight[i] {
-                self.env.delete_before(&mut self.l, i, &mut self.sigma, end);
+                self.env.delete_pending(&mut self.l, i, &mut self.sigma, end, &self.tight);
                 self.stats.deletions += 1;
             }
         }
