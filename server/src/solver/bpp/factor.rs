@@ -30,6 +30,7 @@ impl Solver {
                 self.stats.factor_entries = len;
                 resize(&mut self.l, len);
                 self.l0_valid = false;
+                self.refactor_spent = 0.0;
                 if matches!(variant, Variant::Skyline | Variant::Auto) {
                     resize(&mut self.l0, len);
                 }
@@ -202,7 +203,15 @@ impl Solver {
             return FactorIn::L;
         }
         let (wd, wc, wf) = self.opts.auto_weights;
-        let l0_cost = if self.l0_valid { 0.0 } else { wf * self.env.cost_factor_from(0) };
+        // `L₀` is an investment that later steps of the solve amortize, which a per-step
+        // comparison never sees: rent (refactor) until the refactors of this solve have cost what
+        // buying (`L₀`) costs, then count it as paid (ski rental, at most twice the better of
+        // the two in hindsight).
+        let l0_cost = if self.l0_valid {
+            0.0
+        } else {
+            (wf * self.env.cost_factor_from(0) - self.refactor_spent).max(0.0)
+        };
         let end = self.free_end();
         // (a) deletions from L₀ (each skips the columns of the other tight indices).
         let tmin = self.tight.iter().position(|&t| t).unwrap_or(m);
@@ -246,6 +255,7 @@ impl Solver {
             self.delete_from_l0();
         } else {
             self.stats.auto_choices[2] += 1;
+            self.refactor_spent += cost_c;
             self.incremental();
         }
         FactorIn::L

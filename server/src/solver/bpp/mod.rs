@@ -336,6 +336,8 @@ pub struct Solver {
     sigma: Vec<f64>,
     /// Prefix sums of the free columns' lengths (the `auto` cost model of deletions).
     free_sums: Vec<f64>,
+    /// Predicted cost of the refactors `auto` chose in this solve (its rent against `L₀`).
+    refactor_spent: f64,
     dense_l0: Vec<f64>,
     dense_l: Vec<f64>,
     compact: Vec<f64>,
