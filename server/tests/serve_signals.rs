@@ -59,3 +59,35 @@ fn signals_every_step_events_once_and_faults_by_control() {
     assert!(e.events_frame().is_empty());
     assert!(e.frames().signals == e.signals_frame());
 }
+
+/// `step N` on a paused world publishes one set of frames after its last step; the events of the
+/// steps before travel with it (a fault that acts at the first of three steps is in the frame).
+#[test]
+fn a_multi_step_request_publishes_the_events_of_every_step() {
+    let mut e = Engine::new("crane", msgs::WorldName::new("sig3").unwrap(), Duration::from_secs(60)).unwrap();
+    let t = Instant::now();
+    assert!(e.tick(t));
+    e.set_paused(true);
+    match control(&mut e, 1, fault(msgs::FaultKind::Break, "rope/end")) {
+        msgs::ControlOutcome::Ok(_) => {}
+        o => panic!("{o:?}"),
+    }
+    let before = e.sequence();
+    match control(&mut e, 2, msgs::ControlCommand::Step { count: 3 }) {
+        msgs::ControlOutcome::Ok(_) => {}
+        o => panic!("{o:?}"),
+    }
+    assert_eq!(e.sequence(), before + 3);
+    let ev = msgs::EventsFrame::decode(e.events_frame()).unwrap();
+    assert_eq!(ev.sequence, e.sequence());
+    let fault_at: Vec<f64> =
+        ev.events.iter().filter(|x| x.kind == msgs::EventCode::Fault).map(|x| x.time).collect();
+    assert_eq!(fault_at.len(), 1, "{:?}", ev.events);
+    // Stamped with the time it acted, the start of the first of the three steps: three steps
+    // before the frame's time.
+    let h = e.scene().world.settings().timestep;
+    let lag = ev.sim_time - fault_at[0];
+    assert!((lag - 3.0 * h).abs() < 1e-9, "fault at {} s, frame at {} s", fault_at[0], ev.sim_time);
+    let s = msgs::SignalsFrame::decode(e.signals_frame()).unwrap();
+    assert_eq!(s.events_total, ev.events_total);
+}

@@ -61,6 +61,8 @@ pub struct Engine {
     events_buf: Vec<u8>,
     /// The sequence whose events were encoded last.
     events_sequence: Option<u64>,
+    /// Events of the steps of one `step N` request before its last (published with the last's).
+    earlier_events: Vec<msgs::EventRecord>,
     step_wall_us: f64,
     failure: Option<String>,
     generation: u64,
@@ -125,6 +127,7 @@ impl Engine {
             events: msgs::EventsFrame::default(),
             events_buf: Vec::new(),
             events_sequence: None,
+            earlier_events: Vec::new(),
             step_wall_us: 0.0,
             failure: None,
             generation: 0,
@@ -407,12 +410,19 @@ impl Engine {
                 if !self.paused {
                     return Err((E::Busy, "`step` needs a paused world".into()));
                 }
-                for _ in 0..*count {
+                // One set of frames for the request, after its last step: the events of the steps
+                // before it travel with that step's (each record has its own time).
+                self.earlier_events.clear();
+                for k in 0..*count {
                     if !self.step_once() {
                         break;
                     }
+                    if k + 1 < *count {
+                        super::wire::push_events(&self.scene.signals, &mut self.earlier_events);
+                    }
                 }
                 self.encode_frames(pivotsim_link::wall_ns());
+                self.earlier_events.clear();
             }
             C::Reset => {
                 let scene_ref = self.scene_ref.clone();
@@ -569,9 +579,17 @@ impl Engine {
             warn!("signals frame not encodable: {e}");
         }
         self.events_buf.clear();
-        if self.events_sequence != Some(self.sequence) && !sig.events().is_empty() {
+        let fresh = self.events_sequence != Some(self.sequence);
+        if fresh && (!sig.events().is_empty() || !self.earlier_events.is_empty()) {
             self.events_sequence = Some(self.sequence);
             super::wire::fill_events(sig, self.sequence, w.time(), &mut self.events);
+            if !self.earlier_events.is_empty() {
+                // Earlier steps first, within the frame's bound.
+                let room = msgs::MAX_EVENTS.saturating_sub(self.earlier_events.len());
+                self.events.events.truncate(room);
+                self.events.events.splice(0..0, self.earlier_events.drain(..));
+                self.events.events.truncate(msgs::MAX_EVENTS);
+            }
             if let Err(e) = self.events.encode(&mut self.events_buf) {
                 warn!("events frame not encodable: {e}");
             }

@@ -174,10 +174,19 @@ pub(crate) fn fill_events(signals: &Signals, sequence: u64, sim_time: f64, out: 
     out.sim_time = sim_time;
     out.events_total = signals.events_total();
     out.events.clear();
-    for e in signals.events().iter().take(msgs::MAX_EVENTS) {
+    push_events(signals, &mut out.events);
+}
+
+/// Appends the last step's events as wire records to `out`, up to [`msgs::MAX_EVENTS`] in all
+/// (an event whose name is not a wire name is left out).
+pub(crate) fn push_events(signals: &Signals, out: &mut Vec<msgs::EventRecord>) {
+    for e in signals.events() {
+        if out.len() >= msgs::MAX_EVENTS {
+            break;
+        }
         let finite = |x: f64| if x.is_finite() { x } else { 0.0 };
         let Ok(name) = msgs::ActuatorName::new(e.name.as_str()) else { continue };
-        out.events.push(msgs::EventRecord {
+        out.push(msgs::EventRecord {
             name,
             kind: e.kind.into(),
             time: finite(e.time).max(0.0),
