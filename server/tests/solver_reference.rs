@@ -327,3 +327,21 @@ fn auto_factors_l0_only_when_it_deletes_from_it() {
     }
     assert!(checked >= 6, "only {checked} problems had tight rows");
 }
+
+/// A solve reports its thread's CPU time beside its wall time: positive, and no more than the
+/// wall time (one thread cannot run longer than the clock on the wall; 20 µs for the two clocks'
+/// granularity).
+#[test]
+fn a_solve_reports_its_cpu_time_within_its_wall_time() {
+    for variant in [Variant::Full, Variant::Auto, Variant::Pgs] {
+        let p = random_problem(300, 7, false, 0.05, 1.0);
+        let (_, st) = solve(&p, variant, 100);
+        assert!(st.cpu_us > 0.0, "{variant:?}: cpu {}", st.cpu_us);
+        assert!(
+            st.cpu_us <= st.total_us + 20.0,
+            "{variant:?}: cpu {} µs, wall {} µs",
+            st.cpu_us,
+            st.total_us
+        );
+    }
+}

@@ -37,6 +37,8 @@ pub struct IslandStats {
     pub assemble_us: f64,
     /// Solver wall time (µs).
     pub solve_us: f64,
+    /// Solver thread CPU time (µs): the wall time less what other processes ran meanwhile.
+    pub solve_cpu_us: f64,
     /// Position projection wall time, all iterations (µs; 0 when off).
     pub projection_us: f64,
 }

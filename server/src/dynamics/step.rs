@@ -216,6 +216,7 @@ fn island_stats(
         max_violation,
         assemble_us,
         solve_us: s.total_us,
+        solve_cpu_us: s.cpu_us,
         projection_us: 0.0,
     }
 }

@@ -74,6 +74,8 @@ impl From<&IslandStats> for msgs::IslandStats {
             max_violation: _,
             assemble_us: _,
             solve_us,
+            // The wall time goes on the wire; the CPU time is for the run summary and the report.
+            solve_cpu_us: _,
             projection_us: _,
         } = *s;
         msgs::IslandStats {

@@ -143,6 +143,10 @@ pub struct SolveStats {
     pub solve_us: f64,
     /// Wall time of the whole solve, µs.
     pub total_us: f64,
+    /// CPU time of the solving thread over the whole solve, µs: the wall time less what the
+    /// operating system gave to other processes meanwhile (a virtual machine's steal time is not
+    /// left out: the guest counts it as running); 0 where the clock is unavailable.
+    pub cpu_us: f64,
 }
 
 impl SolveStats {

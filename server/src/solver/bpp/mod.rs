@@ -450,6 +450,7 @@ impl Solver {
     /// a wrong length is reported as an `Empty` status with no work done).
     pub fn solve(&mut self, p: &Mlcp, lambda: &mut [f64]) -> &SolveStats {
         let t_start = Instant::now();
+        let cpu_start = cpu_time::ThreadTime::try_now().ok();
         let m = p.n();
         let (variant, ordering) = self.kernel_for(m);
         self.stats.reset(self.opts.variant, ordering, m, p.a().nnz());
@@ -461,6 +462,7 @@ impl Solver {
         if variant == Variant::Pgs {
             self.solve_pgs(p, lambda);
             self.stats.total_us = us(t_start);
+            self.stats.cpu_us = cpu_us(cpu_start);
             return &self.stats;
         }
         let t = Instant::now();
@@ -501,6 +503,7 @@ impl Solver {
         self.stats.solve_us += us(t);
         self.report(converged, lambda);
         self.stats.total_us = us(t_start);
+        self.stats.cpu_us = cpu_us(cpu_start);
         &self.stats
     }
 
@@ -1076,6 +1079,11 @@ const AUTO_DENSE_MAX: usize = 24;
 
 /// Outer residuals remembered by the non-monotone acceptance of coupled Newton points.
 const OUTER_MEMORY: usize = 4;
+
+/// Thread CPU time since `start` in µs (0 without a start: the clock was unavailable).
+fn cpu_us(start: Option<cpu_time::ThreadTime>) -> f64 {
+    start.and_then(|t| t.try_elapsed().ok()).map_or(0.0, |d| d.as_secs_f64() * 1e6)
+}
 
 pub(super) fn us(t: Instant) -> f64 {
     t.elapsed().as_secs_f64() * 1e6
