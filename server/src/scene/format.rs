@@ -394,6 +394,7 @@ pub(crate) struct EventDef {
     pub above: Option<f64>,
     pub below: Option<f64>,
     pub hysteresis: Option<f64>,
+    pub hold: Option<f64>,
 }
 
 /// `[[fault]]`: a scripted fault.

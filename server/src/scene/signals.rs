@@ -60,13 +60,16 @@ pub(super) fn build_signals(
             _ => return Err(src.invalid(&span, "above", "give exactly one of `above` and `below`")),
         };
         let hysteresis = src.non_negative(&span, "hysteresis", d.hysteresis.unwrap_or(0.0))?;
+        let hold = src.non_negative(&span, "hold", d.hold.unwrap_or(0.0))?;
         signals.add_threshold(Threshold {
             name: EventName::new(&d.name),
             channel,
             dir,
             level,
             hysteresis,
+            hold,
             active: false,
+            since: None,
         });
     }
     Ok(signals)

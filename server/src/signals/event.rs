@@ -23,8 +23,14 @@ pub struct Threshold {
     pub level: f64,
     /// Hysteresis of the clear (≥ 0).
     pub hysteresis: f64,
+    /// Seconds the raise (or the clear) condition must hold without a break before the event
+    /// fires (≥ 0; 0: at the first step): a channel that flickers across its level, like a
+    /// contact's `sliding` flag while a load creeps, raises one event, not one per flicker.
+    pub hold: f64,
     /// Raised now.
     pub active: bool,
+    /// Since when the condition that would change `active` has held (`None`: it does not hold).
+    pub since: Option<f64>,
 }
 
 /// What happened.

@@ -3,7 +3,10 @@
 //!
 //! A threshold `above L` (`below L`) is *raised* at the first step whose value is `> L` (`< L`) and
 //! *cleared* at the first later step whose value is back `≤ L − hyst` (`≥ L + hyst`); a dropped-out
-//! channel neither raises nor clears. Each raise and clear is one [`Event`] of that step.
+//! channel neither raises nor clears. Each raise and clear is one [`Event`] of that step. With a
+//! hold `τ > 0` the raise (clear) condition must hold at every step from some time `t₀` to the
+//! step at `t ≥ t₀ + τ`, which then fires; a step without it starts the count again (a debounce:
+//! a 0/1 flag that flickers raises one event, which a hysteresis cannot give a flag).
 
 use super::eval::Signals;
 use super::event::{Event, EventKind, Threshold, ThresholdDir};
@@ -63,15 +66,20 @@ impl Signals {
                 ThresholdDir::Above => (v > t.level, v <= t.level - t.hysteresis),
                 ThresholdDir::Below => (v < t.level, v >= t.level + t.hysteresis),
             };
-            let kind = if !t.active && raise {
-                EventKind::Raised
-            } else if t.active && clear {
-                EventKind::Cleared
-            } else {
+            let (kind, holds) =
+                if t.active { (EventKind::Cleared, clear) } else { (EventKind::Raised, raise) };
+            let (name, level, hold) = (t.name, t.level, t.hold);
+            if !holds {
+                self.thresholds[i].since = None;
                 continue;
-            };
-            let (name, level) = (t.name, t.level);
+            }
+            let since = *self.thresholds[i].since.get_or_insert(time);
+            // A hold of k steps is met at the k-th step's time, up to rounding of the sum.
+            if time - since < hold - 1e-9 {
+                continue;
+            }
             self.thresholds[i].active = kind == EventKind::Raised;
+            self.thresholds[i].since = None;
             self.push_event(Event { kind, name, time, value: v, level });
         }
     }
@@ -80,6 +88,7 @@ impl Signals {
     pub fn reset(&mut self) {
         for t in &mut self.thresholds {
             t.active = false;
+            t.since = None;
         }
         self.fired.clear();
         self.queued.clear();
