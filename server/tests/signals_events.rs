@@ -7,9 +7,14 @@
 use pivotsim_server::scene;
 use pivotsim_server::signals::EventKind;
 
-/// (time, sliding flag) per step and the (kind, time) of every `load-slipping` event of a 20 s
-/// forklift run with the event's hold set to `hold`.
-fn run(hold: f64) -> (Vec<(f64, f64)>, Vec<(EventKind, f64)>) {
+/// (time, sliding flag) per step.
+type Flag = Vec<(f64, f64)>;
+/// (kind, time) per event.
+type Fired = Vec<(EventKind, f64)>;
+
+/// The sliding flag per step and every `load-slipping` event of a 20 s forklift run with the
+/// event's hold set to `hold`.
+fn run(hold: f64) -> (Flag, Fired) {
     let set = [format!("event.load-slipping.hold={hold}").parse().expect("override")];
     let mut s = scene::load_with("forklift", &set).expect("forklift");
     let steps = (s.duration / s.world.settings().timestep).round() as usize;
