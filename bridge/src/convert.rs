@@ -704,12 +704,6 @@ pub fn contact_color(state: msgs::ContactCode) -> ColorRGBA {
 /// Namespace of the contact arrows on `/pivotsim/contact_markers`.
 pub const CONTACTS_NS: &str = "contacts";
 
-/// The contact force of a record: the force on body B, `normal_force · normal + friction` (N,
-/// world frame; A receives the opposite).
-pub fn contact_force(c: &msgs::ContactRecord) -> [f64; 3] {
-    std::array::from_fn(|i| c.normal_force * c.normal[i] + c.friction[i])
-}
-
 /// `/pivotsim/contact_markers`: a `DELETEALL` of namespace [`CONTACTS_NS`] (so that contacts that
 /// vanished disappear), then one `ARROW` per pressed contact (stick or slip) in `world_frame`:
 /// from the contact point to the point + force on B · `metres_per_newton`, shaft 1 cm, head 2 cm
@@ -730,7 +724,7 @@ pub fn contact_markers(
         ..Marker::default()
     });
     for (i, c) in frame.contacts.iter().enumerate() {
-        let f = contact_force(c);
+        let f = c.force();
         let n = dot(f, f).sqrt();
         if c.state == msgs::ContactCode::Open || !(n > 1e-9 && n.is_finite()) {
             continue;

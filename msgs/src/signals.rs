@@ -303,6 +303,12 @@ impl SignalChannel {
 }
 
 impl ContactRecord {
+    /// The contact force on body B, `normal_force · normal + friction` (world, N; A receives the
+    /// opposite).
+    pub fn force(&self) -> [f64; 3] {
+        std::array::from_fn(|i| self.normal_force * self.normal[i] + self.friction[i])
+    }
+
     fn validate(&self, i: usize) -> Result<(), SignalsError> {
         for v in self.point {
             finite(Some(i), "point", v)?;

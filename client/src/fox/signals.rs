@@ -162,17 +162,14 @@ pub fn contacts_json(s: &msgs::SignalsFrame, scene: Option<&msgs::SceneDescripti
 /// at the contact points ([`super::scene::force_arrows`]), scaled so that the largest is
 /// [`LONGEST_ARROW`] long; open contacts carry no force and draw nothing.
 pub fn contact_forces(s: &msgs::SignalsFrame, stamp: Timestamp) -> SceneUpdate {
-    let force = |c: &msgs::ContactRecord| -> [f64; 3] {
-        std::array::from_fn(|i| c.normal_force * c.normal[i] + c.friction[i])
-    };
     let largest = s
         .contacts
         .iter()
-        .map(|c| force(c).iter().map(|x| x * x).sum::<f64>().sqrt())
+        .map(|c| c.force().iter().map(|x| x * x).sum::<f64>().sqrt())
         .filter(|n| n.is_finite())
         .fold(0.0, f64::max);
     let scale = if largest > 1e-9 { LONGEST_ARROW / largest } else { 0.0 };
-    super::scene::force_arrows(s.contacts.iter().map(|c| (c.point, force(c))), scale, stamp)
+    super::scene::force_arrows(s.contacts.iter().map(|c| (c.point, c.force())), scale, stamp)
 }
 
 /// JSON schema of [`contacts_json`].
