@@ -422,7 +422,6 @@ impl Engine {
                     }
                 }
                 self.encode_frames(pivotsim_link::wall_ns());
-                self.earlier_events.clear();
             }
             C::Reset => {
                 let scene_ref = self.scene_ref.clone();
@@ -582,14 +581,9 @@ impl Engine {
         let fresh = self.events_sequence != Some(self.sequence);
         if fresh && (!sig.events().is_empty() || !self.earlier_events.is_empty()) {
             self.events_sequence = Some(self.sequence);
-            super::wire::fill_events(sig, self.sequence, w.time(), &mut self.events);
-            if !self.earlier_events.is_empty() {
-                // Earlier steps first, within the frame's bound.
-                let room = msgs::MAX_EVENTS.saturating_sub(self.earlier_events.len());
-                self.events.events.truncate(room);
-                self.events.events.splice(0..0, self.earlier_events.drain(..));
-                self.events.events.truncate(msgs::MAX_EVENTS);
-            }
+            // The earlier steps' of a `step N` request first, within the frame's bound.
+            let earlier = &mut self.earlier_events;
+            super::wire::fill_events(sig, self.sequence, w.time(), earlier, &mut self.events);
             if let Err(e) = self.events.encode(&mut self.events_buf) {
                 warn!("events frame not encodable: {e}");
             }
