@@ -148,7 +148,7 @@
 //! of the tight indices still to be deleted (`Envelope::delete_pending`: `chol(A_FF)` is `L₀`'s free
 //! block after one rank-1 update per tight column, each rotating through free columns only;
 //! measured on the forwarder, whose grasp deletes many rows: mean solve per step with `skyline`
-//! 236 → 150 µs, which was 0.5× `full` and now matches it). `skyline-refactor`: envelope factor of `A_FF ⊕ I` per step.
+//! 236 → 150 µs; in the report 0.5× → 0.9× the speed of `full`). `skyline-refactor`: envelope factor of `A_FF ⊕ I` per step.
 //! `incremental`: keep the last factor and refactor from the first index whose state changed.
 //! `auto`: per step the cheapest predicted of deletions from `L₀`, deletions from the last factor
 //! (when `T` only grew) and the incremental refactor, from the skyline cost model; `L₀` itself is
