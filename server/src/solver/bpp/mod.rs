@@ -384,7 +384,15 @@ pub struct Solver {
     frozen: Vec<f64>,
     have_frozen: bool,
     /// `‖A_i‖₁` of each permuted row (`find_infeasible`).
-    row_norm: Vec<f64>,
+    /// Position of each row's diagonal in `ap`'s values (per pattern).
+    diag_at: Vec<usize>,
+    /// Set when a solve converges at an iterate whose `w` was computed from its `λ` and neither
+    /// changed since (the safe answer then needs no second `w = Aλ − b`).
+    w_current: bool,
+    /// The residual `(abs, rel)` of that iterate.
+    converged_residual: (f64, f64),
+    /// Set by `make_safe` when it left `λ` and `w` as they were.
+    safe_unchanged: bool,
     /// The solve must stop by then (time budget), if set.
     deadline: Option<Instant>,
     /// The deadline stopped the solve.
@@ -484,6 +492,7 @@ impl Solver {
             self.opts.ipm_after
         };
         let mut converged = self.bpp_loop(variant, has_friction, warm || !has_friction);
+        let w_current = converged && self.w_current;
         if !converged && !self.needs_prox && self.ipm_due() {
             converged = self.interior_point_with_crossover(variant, has_friction);
         }
@@ -493,15 +502,21 @@ impl Solver {
         }
         // The answer, made safe: the solution, or else the chosen candidate, polished.
         let t = Instant::now();
+        let mut known_residual = None;
         if converged {
-            self.stats.energy_scaled = self.make_safe();
+            let w_current = w_current && !self.needs_prox;
+            self.stats.energy_scaled = self.make_safe(w_current);
+            if w_current && self.safe_unchanged {
+                // `λ` and `w` are still the pair whose residual ended the loop.
+                known_residual = Some(self.converged_residual);
+            }
         } else {
             self.choose_capped();
             self.polish();
             self.exact_bilateral();
         }
         self.stats.solve_us += us(t);
-        self.report(converged, lambda);
+        self.report(converged, known_residual, lambda);
         self.stats.total_us = us(t_start);
         self.stats.cpu_us = cpu_us(cpu_start);
         &self.stats
@@ -536,6 +551,13 @@ impl Solver {
             self.ap.permuted_from(p.a(), &self.perm, &self.inv);
             self.pattern.copy_pattern_from(p.a());
             self.pattern_ordering = Some(ordering);
+            // Where each row's diagonal entry is stored (`usize::MAX`: not stored, i.e. zero).
+            self.diag_at.clear();
+            for i in 0..m {
+                let (cols, _) = self.ap.row(i);
+                let at = cols.binary_search(&i).map_or(usize::MAX, |q| self.ap.row_ptr()[i] + q);
+                self.diag_at.push(at);
+            }
             self.metrics = [
                 ordering::bandwidth(p.a()),
                 ordering::envelope(p.a()),
@@ -564,10 +586,10 @@ impl Solver {
         }
         self.zero_feasible =
             (0..m).all(|i| self.fip[i].is_some() || (self.lop[i] <= 0.0 && self.hip[i] >= 0.0));
-        self.max_diag = self.ap.max_diag();
-        resize(&mut self.row_norm, m);
-        for i in 0..m {
-            self.row_norm[i] = self.ap.row(i).1.iter().map(|a| a.abs()).sum();
+        let vals = self.ap.values();
+        self.max_diag = self.diag_at.iter().filter_map(|&k| vals.get(k)).fold(0.0, |a: f64, &d| a.max(d));
+        if m == 0 {
+            self.max_diag = 1.0;
         }
     }
 
@@ -595,6 +617,7 @@ impl Solver {
         });
         self.outer_hist = [0.0; OUTER_MEMORY];
         self.needs_prox = false;
+        self.w_current = false;
         self.prox_shift = 0.0;
         resize(&mut self.warm_lam, m);
         resize(&mut self.lam_hat, m);
@@ -633,9 +656,11 @@ impl Solver {
 
     /// Residual against the true bounds and status of the answer in `λ`, which it writes into
     /// `lambda` in the problem's row order with its index set.
-    fn report(&mut self, converged: bool, lambda: &mut [f64]) {
+    /// `known`: that residual when the caller has it.
+    fn report(&mut self, converged: bool, known: Option<(f64, f64)>, lambda: &mut [f64]) {
         let m = lambda.len();
-        let (res, res_rel) = super::natural_residual(&self.lam, &self.w, &self.lop, &self.hip, &self.fip);
+        let (res, res_rel) = known
+            .unwrap_or_else(|| super::natural_residual(&self.lam, &self.w, &self.lop, &self.hip, &self.fip));
         self.stats.residual = res;
         self.stats.residual_rel = res_rel;
         self.stats.status = if converged && (res_rel <= self.opts.tol_rel || res == 0.0) {
@@ -738,6 +763,9 @@ impl Solver {
         self.frozen.copy_from_slice(&self.lam);
         self.have_frozen = true;
         if res_rel <= self.opts.tol_rel || res == 0.0 {
+            // `w` is the one this residual was computed from.
+            self.w_current = true;
+            self.converged_residual = (res, res_rel);
             return Next::Return(true);
         }
         if friction && self.opts.coupled_update {
@@ -963,12 +991,16 @@ impl Solver {
         self.infeasible.clear();
         for i in 0..m {
             let (lo, hi) = (self.lo_eff[i], self.hi_eff[i]);
-            let tol_w = || 1e-13 * (self.bp[i].abs() + self.row_norm[i] * lam_scale).max(f64::MIN_POSITIVE);
+            // `‖A_i‖₁` only for a tight row whose `w` has the wrong sign at all.
+            let tol_w = || {
+                let row_norm: f64 = self.ap.row(i).1.iter().map(|a| a.abs()).sum();
+                1e-13 * (self.bp[i].abs() + row_norm * lam_scale).max(f64::MIN_POSITIVE)
+            };
             let bad = match self.state[i] {
                 IndexState::Free => self.lam[i] < lo - tol_l || self.lam[i] > hi + tol_l,
                 // A degenerate box (lo = hi) is satisfied by any w.
-                IndexState::Lower => lo < hi && self.w[i] < -tol_w(),
-                IndexState::Upper => lo < hi && self.w[i] > tol_w(),
+                IndexState::Lower => lo < hi && self.w[i] < 0.0 && self.w[i] < -tol_w(),
+                IndexState::Upper => lo < hi && self.w[i] > 0.0 && self.w[i] > tol_w(),
             };
             if bad {
                 self.infeasible.push(i);

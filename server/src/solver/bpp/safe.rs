@@ -23,21 +23,30 @@ use super::Solver;
 
 impl Solver {
     /// Makes `λ` (permuted order) feasible and of non-positive merit (module docs); leaves the
-    /// matching `w`. Returns whether `λ` had to be scaled towards zero.
-    pub(super) fn make_safe(&mut self) -> bool {
+    /// matching `w`. `w_current`: `w` already matches `λ` (then it is recomputed only if the
+    /// projection moves `λ`). Returns whether `λ` had to be scaled towards zero.
+    pub(super) fn make_safe(&mut self, w_current: bool) -> bool {
         let m = self.ap.n();
+        let mut moved = false;
         for i in 0..m {
             if self.fip[i].is_none() {
-                self.lam[i] = self.lam[i].max(self.lop[i]).min(self.hip[i]);
+                let x = self.lam[i].max(self.lop[i]).min(self.hip[i]);
+                moved |= x != self.lam[i];
+                self.lam[i] = x;
             }
         }
         for i in 0..m {
             if self.fip[i].is_some() {
                 let (lo, hi) = effective_bounds(self.lop[i], self.hip[i], self.fip[i], &self.lam);
-                self.lam[i] = self.lam[i].max(lo).min(hi);
+                let x = self.lam[i].max(lo).min(hi);
+                moved |= x != self.lam[i];
+                self.lam[i] = x;
             }
         }
-        self.compute_w();
+        if moved || !w_current {
+            self.compute_w();
+        }
+        self.safe_unchanged = !moved;
         let (mut lal, mut bl) = (0.0, 0.0);
         for i in 0..m {
             // λᵀAλ = λᵀ(w + b).
@@ -49,6 +58,7 @@ impl Solver {
         if f.is_nan() || f <= 0.0 || !self.zero_feasible {
             return false;
         }
+        self.safe_unchanged = false;
         let t = if lal > 0.0 { (bl / lal).clamp(0.0, 1.0) } else { 0.0 };
         for i in 0..m {
             self.lam[i] *= t;
@@ -70,7 +80,7 @@ impl Solver {
                 _ if self.have_frozen && self.prox_shift == 0.0 => self.lam.copy_from_slice(&self.frozen),
                 _ => continue,
             }
-            let scaled = self.make_safe();
+            let scaled = self.make_safe(false);
             let (_, r) = natural_residual(&self.lam, &self.w, &self.lop, &self.hip, &self.fip);
             // The frozen-bounds solution is complementary (an ODE-style answer with friction
             // boxes from an intermediate normal): preferred whenever there is one.
@@ -139,7 +149,7 @@ impl Solver {
             }
             done += 1;
         }
-        let scaled = self.make_safe();
+        let scaled = self.make_safe(false);
         let (_, r1) = natural_residual(&self.lam, &self.w, &self.lop, &self.hip, &self.fip);
         if done > 0 && r1 < r0 {
             self.stats.polish_sweeps = done;
