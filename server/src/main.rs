@@ -58,6 +58,11 @@ enum Command {
         /// (not converged first, then most pivot steps, then slowest), with their warm starts.
         #[arg(long, default_value_t = 0, value_parser = clap::value_parser!(u32).range(0..=100_000))]
         dump_hard: u32,
+        /// Also solve every island problem with this variant (repeatable, up to 3), answers
+        /// discarded: the summary gives the paired speed-up of the run's own variant over it on the
+        /// same problems and how far its answers deviate.
+        #[arg(long)]
+        shadow: Vec<Variant>,
         /// Print the summary as one JSON object.
         #[arg(long)]
         json: bool,
@@ -124,6 +129,7 @@ fn main() -> ExitCode {
             dump_mlcp,
             every,
             dump_hard,
+            shadow,
             json,
             set,
         }) => {
@@ -135,6 +141,7 @@ fn main() -> ExitCode {
                 dump_mlcp,
                 every: every as usize,
                 dump_hard: dump_hard as usize,
+                shadow,
                 progress: !json,
             };
             cli::run::run(&scene, &set, &opts, json)

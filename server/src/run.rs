@@ -28,7 +28,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 use serde::Serialize;
 use thiserror::Error;
 
-use crate::dynamics::{IslandStats, Watchdog, World};
+use crate::dynamics::{IslandStats, MAX_SHADOWS, Watchdog, World};
 use crate::scene::{Scene, SceneStepError};
 use crate::solver::{SolveStatus, Variant, io};
 
@@ -51,6 +51,9 @@ pub struct RunOptions {
     /// (those that did not converge first, then by pivot steps, then by solve time) and write them
     /// at the end, each with the warm start the simulation gave it (`*-hardNN-step*-island*.txt`).
     pub dump_hard: usize,
+    /// Variants that also solve every island problem, answers discarded (paired timing and
+    /// agreement, [`World::set_shadow_variants`]; at most [`MAX_SHADOWS`]).
+    pub shadow: Vec<Variant>,
     /// Show a progress bar on a terminal.
     pub progress: bool,
 }
@@ -133,6 +136,33 @@ pub struct RunSummary {
     pub solves_fallback: u64,
     /// Island solves stopped by the time budget (`max_solve_us`).
     pub solves_budget: u64,
+    /// The shadow variants' paired numbers (`--shadow`), in the order given.
+    pub shadow: Vec<ShadowSummary>,
+}
+
+/// A shadow variant over the run: the same island problems as the run's own variant, solved
+/// within microseconds of it (`dynamics/shadow.rs`), so that the speed-up is a paired one.
+#[derive(Debug, Clone, Serialize, PartialEq, Default)]
+pub struct ShadowSummary {
+    /// The shadow variant.
+    pub variant: String,
+    /// Its solve time per step, all islands: mean over every step (µs).
+    pub mean_solve_us: f64,
+    /// The same over the steps with tight rows in the run's own answer (µs; the paper's Table 3).
+    pub mean_tight_us: f64,
+    /// The run's own variant on the same steps: mean over every step (µs).
+    pub own_mean_solve_us: f64,
+    /// And over the steps with tight rows (µs).
+    pub own_mean_tight_us: f64,
+    /// Shadow time over own time, summed over every step: how many times faster the run's own
+    /// variant solved the same problems.
+    pub speedup: f64,
+    /// The same over the steps with tight rows.
+    pub speedup_tight: f64,
+    /// Shadow solves that did not converge.
+    pub not_converged: u64,
+    /// Largest `‖λ_shadow − λ‖∞ / ‖λ‖∞` over the islands that both converged on.
+    pub max_deviation: f64,
 }
 
 /// Why a run could not start or write its outputs.
@@ -209,9 +239,21 @@ pub fn island_mass_ratio(world: &World, k: usize) -> f64 {
     if lo.is_finite() && lo > 0.0 { hi / lo } else { 1.0 }
 }
 
+/// Per-step accumulators of a shadow's summary: (own, shadow) time sums over every step and over
+/// the steps with tight rows.
+#[derive(Default, Clone, Copy)]
+struct ShadowAcc {
+    all: (f64, f64),
+    tight: (f64, f64),
+    not_converged: u64,
+    max_deviation: f64,
+}
+
 /// Per-step accumulators of the summary.
 #[derive(Default)]
 struct Acc {
+    shadow: [ShadowAcc; MAX_SHADOWS],
+    tight_steps: u64,
     solve_us: Vec<f64>,
     solve_cpu_us: Vec<f64>,
     step_us: f64,
@@ -238,6 +280,11 @@ pub fn run_scene_observed(
     let mut out = Outputs::open(opts)?;
     let bar = progress_bar(opts.progress, steps, &scene.name);
     let mut sum = RunSummary::start(&scene.name, scene.world.settings().solver.variant.name());
+    sum.shadow = opts
+        .shadow
+        .iter()
+        .map(|v| ShadowSummary { variant: v.name().into(), ..Default::default() })
+        .collect();
     let mut hard = HardSolves::new(if opts.dump_mlcp.is_some() { opts.dump_hard } else { 0 });
     let mut acc = Acc {
         solve_us: Vec::with_capacity(steps as usize),
@@ -291,6 +338,7 @@ fn prepare(scene: &mut Scene, opts: &RunOptions) -> Result<u64, RunError> {
         s.solver.variant = v;
         scene.world.set_settings(s).map_err(|e| RunError::Option(e.to_string()))?;
     }
+    scene.world.set_shadow_variants(&opts.shadow).map_err(|e| RunError::Option(e.to_string()))?;
     let h = scene.world.settings().timestep;
     let duration = opts.duration.unwrap_or(scene.duration);
     if !(duration.is_finite() && duration > 0.0) {
@@ -342,6 +390,18 @@ impl RunSummary {
         self.mean_tight_fraction = acc.tight_largest / n;
         (self.p99_solve_us, self.max_solve_us) = p99_and_max(&mut acc.solve_us);
         (self.p99_solve_cpu_us, self.max_solve_cpu_us) = p99_and_max(&mut acc.solve_cpu_us);
+        let nt = acc.tight_steps.max(1) as f64;
+        let ratio = |(own, sh): (f64, f64)| if own > 0.0 { sh / own } else { 0.0 };
+        for (out, a) in self.shadow.iter_mut().zip(&acc.shadow) {
+            out.mean_solve_us = a.all.1 / n;
+            out.own_mean_solve_us = a.all.0 / n;
+            out.mean_tight_us = a.tight.1 / nt;
+            out.own_mean_tight_us = a.tight.0 / nt;
+            out.speedup = ratio(a.all);
+            out.speedup_tight = ratio(a.tight);
+            out.not_converged = a.not_converged;
+            out.max_deviation = a.max_deviation;
+        }
     }
 }
 
@@ -485,6 +545,7 @@ fn record_step(world: &World, sum: &mut RunSummary, acc: &mut Acc) {
     if let Some(l) = largest.filter(|l| l.rows > 0) {
         acc.tight_largest += l.tight as f64 / l.rows as f64;
     }
+    record_shadows(stats, acc, sum.shadow.len());
     sum.max_islands = sum.max_islands.max(stats.len());
     sum.max_joint_error_m = sum.max_joint_error_m.max(world.max_joint_error());
     for b in world.bodies().iter().filter(|b| b.is_dynamic()) {
@@ -492,6 +553,29 @@ fn record_step(world: &World, sum: &mut RunSummary, acc: &mut Acc) {
     }
     acc.solve_us.push(solve);
     acc.solve_cpu_us.push(solve_cpu);
+}
+
+/// Adds the step's shadow solves (the first `n` slots) to their accumulators.
+fn record_shadows(stats: &[IslandStats], acc: &mut Acc, n: usize) {
+    let tight = stats.iter().any(|s| s.tight > 0);
+    acc.tight_steps += tight as u64;
+    for (i, a) in acc.shadow.iter_mut().enumerate().take(n) {
+        let (mut own, mut sh) = (0.0, 0.0);
+        for s in stats {
+            let x = &s.shadow[i];
+            own += s.solve_us;
+            sh += x.solve_us;
+            if x.status != SolveStatus::Converged {
+                a.not_converged += 1;
+            } else if s.status == SolveStatus::Converged {
+                a.max_deviation = a.max_deviation.max(x.deviation);
+            }
+        }
+        a.all = (a.all.0 + own, a.all.1 + sh);
+        if tight {
+            a.tight = (a.tight.0 + own, a.tight.1 + sh);
+        }
+    }
 }
 
 /// How hard a solve was: (did not converge, pivot steps, solve time).
@@ -591,5 +675,25 @@ pub fn summary_text(s: &RunSummary) -> String {
             .unwrap_or_default(),
         s.error.as_deref().map(|e| format!("\nstopped early: {e}")).unwrap_or_default(),
         if s.dumped > 0 { format!("\nMLCP files written: {}", s.dumped) } else { String::new() },
-    )
+    ) + &s
+        .shadow
+        .iter()
+        .map(|x| {
+            format!(
+                "\nshadow {}: {:.1} µs per step, {} {:.1} on the same problems (speed-up of {} {:.2}×); \
+                 steps with tight rows {:.1} against {:.1} ({:.2}×); {} not converged; deviation max {:.1e}",
+                x.variant,
+                x.mean_solve_us,
+                s.variant,
+                x.own_mean_solve_us,
+                s.variant,
+                x.speedup,
+                x.mean_tight_us,
+                x.own_mean_tight_us,
+                x.speedup_tight,
+                x.not_converged,
+                x.max_deviation
+            )
+        })
+        .collect::<String>()
 }

@@ -43,6 +43,7 @@
 //! | | `geometric_stiffness.rs` | geometric stiffness of loaded joints: `M̃ = M + h² K̃` per body |
 //! | | `assemble.rs` | per-island `A`, `b` from body blocks; `v⁺ = v_free + M⁻¹Jᵀλ` |
 //! | | `stats.rs` | per-island statistics of a step |
+//! | | `shadow.rs` | shadow solves: other variants on the same island problems, for paired timing and agreement |
 //! | | `step.rs` | the stages of a time step and its integrator, on reusable buffers |
 //! | | `projection.rs` | optional position projection (post-stabilization) |
 //! | world | `world/mod.rs` | the world: adding and validating items, controls, the step |
@@ -97,6 +98,7 @@ mod motor;
 mod projection;
 mod rows;
 mod settings;
+mod shadow;
 mod stats;
 mod step;
 mod watchdog;
@@ -125,6 +127,7 @@ pub use joint::{DEFAULT_COMPLIANCE, JOINT_SLOTS, Joint, JointBuilder, JointFrame
 pub use motor::{DEFAULT_POSITION_GAIN, FreeAxis, JointLimit, JointMotor, MotorMode, wrap_angle};
 pub use rows::{ConstraintRow, Jac6, MAX_ROW_BODIES, RowKey, RowKind};
 pub use settings::{GeometricStiffness, WorldSettings};
-pub use stats::IslandStats;
+pub use shadow::TooManyShadows;
+pub use stats::{IslandStats, MAX_SHADOWS, ShadowSolve};
 pub use watchdog::{Instability, Watchdog, WatchdogSettings};
 pub use world::{JointFramesWorld, JointReaction, World};

@@ -4,6 +4,24 @@
 
 use crate::solver::{SolveStatus, Variant};
 
+/// Most shadow variants a world solves beside its own ([`World::set_shadow_variants`](super::World::set_shadow_variants)).
+pub const MAX_SHADOWS: usize = 3;
+
+/// The same island problem solved by another variant, its answer discarded (`shadow.rs`).
+#[derive(Debug, Clone, Copy, PartialEq, Default, serde::Serialize)]
+pub struct ShadowSolve {
+    /// The variant (`None`: no shadow in this slot).
+    pub variant: Option<Variant>,
+    /// Solver wall time (µs).
+    pub solve_us: f64,
+    /// Pivot steps.
+    pub pivot_steps: usize,
+    /// How it ended.
+    pub status: SolveStatus,
+    /// `‖λ_shadow − λ‖∞ / ‖λ‖∞` against the island's own answer (∞ when not comparable).
+    pub deviation: f64,
+}
+
 /// What one island's solve did in the last step.
 #[derive(Debug, Clone, Copy, PartialEq, Default, serde::Serialize)]
 pub struct IslandStats {
@@ -41,4 +59,7 @@ pub struct IslandStats {
     pub solve_cpu_us: f64,
     /// Position projection wall time, all iterations (µs; 0 when off).
     pub projection_us: f64,
+    /// The shadow solves of this island, in the order of the world's shadow variants (empty
+    /// slots have `variant: None`).
+    pub shadow: [ShadowSolve; MAX_SHADOWS],
 }

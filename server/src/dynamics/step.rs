@@ -74,6 +74,7 @@ use super::joint::{JOINT_SLOTS, Joint};
 use super::joint_rows::push_joint_rows;
 use super::rows::{ConstraintRow, RowKey, RowKind, Side, WarmRow};
 use super::settings::{GeometricStiffness, WorldSettings};
+use super::shadow::Shadows;
 use super::stats::IslandStats;
 use crate::solver::{IndexState, Mlcp, SolveStats, Solver};
 
@@ -89,6 +90,8 @@ pub(crate) struct StepWorkspace {
     /// The island problem, refilled in place for every island.
     pub problem: Mlcp,
     pub solvers: Vec<Solver>,
+    /// Other variants solving the same island problems for comparison (`shadow.rs`; none by default).
+    pub shadows: Shadows,
     pub v_new: Vec<Vector3<f64>>,
     pub w_new: Vec<Vector3<f64>>,
     pub x_new: Vec<Vector3<f64>>,
@@ -218,6 +221,7 @@ fn island_stats(
         solve_us: s.total_us,
         solve_cpu_us: s.cpu_us,
         projection_us: 0.0,
+        shadow: Default::default(),
     }
 }
 
@@ -332,9 +336,20 @@ impl StepWorkspace {
         if self.capture {
             self.captured.push(self.problem.clone());
         }
+        // Shadows first on odd steps (`shadow.rs`), never ahead of a solve with a time budget.
+        let shadows_first = !self.shadows.is_empty() && deadline.is_none() && step % 2 == 1;
+        if shadows_first {
+            self.shadows.solve(&self.problem, solved, settings.solver);
+        }
         self.solvers[solved].set_deadline(deadline);
         let s = self.solvers[solved].solve(&self.problem, &mut self.asm.lambda);
-        let st = island_stats(k, self.islands.bodies(k).len(), m, s, max_violation, assemble_us);
+        let mut st = island_stats(k, self.islands.bodies(k).len(), m, s, max_violation, assemble_us);
+        if !self.shadows.is_empty() {
+            if !shadows_first {
+                self.shadows.solve(&self.problem, solved, settings.solver);
+            }
+            self.shadows.record(&mut st, &self.asm.lambda);
+        }
         self.asm.apply_impulses(k, &self.islands, &self.rows, &mut self.v_new, &mut self.w_new);
         self.add_input_work(k);
         self.stat_of_island[k] = solved;

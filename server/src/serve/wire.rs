@@ -77,6 +77,8 @@ impl From<&IslandStats> for msgs::IslandStats {
             // The wall time goes on the wire; the CPU time is for the run summary and the report.
             solve_cpu_us: _,
             projection_us: _,
+            // An offline measurement (`run --shadow`), not published.
+            shadow: _,
         } = *s;
         msgs::IslandStats {
             variant: variant.into(),

@@ -125,10 +125,11 @@ impl Plan {
         }
     }
 
-    /// Units of work for the progress bar: scene runs, island sets, extremes runs, Fig. 4 sizes,
+    /// Units of work for the progress bar: scene runs (with the paired one), island sets, extremes runs, Fig. 4 sizes,
     /// equal-time scenes, rapier runs.
     pub fn units(&self) -> u64 {
-        let runs = self.scenes.len() * (self.variants.len() + 1);
+        // Per scene: a run per variant, `auto` cold, and `full` with the paired shadows.
+        let runs = self.scenes.len() * (self.variants.len() + 2);
         let islands = self.scenes.len();
         let extremes = self.extreme_variants.len() * (self.compliances.len() + self.mass_ratios.len());
         let rapier = if super::rapier::BUILT { 3 * 2 * self.rapier_ratios.len() } else { 0 };

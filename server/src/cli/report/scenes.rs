@@ -1,12 +1,14 @@
 //! Stages 1 and 3: every scene with every exact variant (per-step solve time, tight count, pivot
-//! steps), its islands dumped from the `auto` run, and the same scene without warm starts.
+//! steps), its islands dumped from the `auto` run, the same scene without warm starts, and `full`
+//! with `skyline` and `auto` solving each of its island problems beside it (paired speed-ups,
+//! `dynamics/shadow.rs`).
 
 use std::path::{Path, PathBuf};
 
 use anyhow::Context;
 use indicatif::ProgressBar;
 use pivotsim_server::dynamics::World;
-use pivotsim_server::run::{RunOptions, RunSummary, run_scene_observed};
+use pivotsim_server::run::{RunOptions, RunSummary, ShadowSummary, run_scene_observed};
 use pivotsim_server::scene::{self, SceneOverride};
 use pivotsim_server::solver::Variant;
 use serde::Serialize;
@@ -67,6 +69,8 @@ pub struct SceneResult {
     pub variants: Vec<VariantRun>,
     /// `auto` without warm starts (stage 3).
     pub cold: VariantRun,
+    /// `full`'s run with `skyline` and `auto` as shadows: their paired numbers on its problems.
+    pub paired: Vec<ShadowSummary>,
     /// Where the `auto` run dumped its islands.
     #[serde(skip)]
     pub dump_dir: PathBuf,
@@ -103,12 +107,16 @@ pub fn run(plan: &Plan, dumps: &Path, pb: &ProgressBar) -> anyhow::Result<Vec<Sc
         let cold_set = ["warm_start=false".parse::<SceneOverride>().context("override")?];
         let (_, cold) = run_one(name, Variant::Auto, plan, &cold_set, None)?;
         pb.inc(1);
+        pb.set_message(format!("{name}: full with paired skyline and auto"));
+        let paired = run_paired(name, plan)?;
+        pb.inc(1);
         results.push(SceneResult {
             scene: name.to_string(),
             max_rows: table2.0,
             max_mass_ratio: table2.1,
             variants,
             cold,
+            paired,
             dump_dir,
         });
     }
@@ -136,6 +144,21 @@ pub fn run_one(
     let summary = run_scene_observed(&mut sc, &opts, |w: &World| steps.push(step_point(w)))
         .with_context(|| format!("scene {name}, {}", v.name()))?;
     Ok((summary.clone(), variant_run(v, &summary, steps)))
+}
+
+/// `full` on `name` with `skyline` and `auto` solving every island problem beside it: the speed-up
+/// of each over `full` on the very same problems (`shadow.rs`), and their deviation from its answers.
+fn run_paired(name: &str, plan: &Plan) -> anyhow::Result<Vec<ShadowSummary>> {
+    let mut sc = scene::load(name).with_context(|| format!("scene {name}"))?;
+    let opts = RunOptions {
+        duration: plan.duration,
+        variant: Some(Variant::Full),
+        shadow: vec![Variant::Skyline, Variant::Auto],
+        ..RunOptions::default()
+    };
+    let summary =
+        run_scene_observed(&mut sc, &opts, |_| {}).with_context(|| format!("scene {name}, paired"))?;
+    Ok(summary.shadow)
 }
 
 fn step_point(w: &World) -> StepPoint {

@@ -1,6 +1,7 @@
 //! Live model changes between steps that a scene script or an operator triggers: latching and
 //! releasing joints (a hook latching onto a load, a grapple letting go) and capturing the island
-//! problems of a step for offline study (`pivotsim-server run --dump-mlcp`).
+//! problems of a step for offline study (`pivotsim-server run --dump-mlcp`), and shadow solves of
+//! them by other variants (`run --shadow`, `shadow.rs`).
 //!
 //! **Latching.** A disabled joint adds no rows. Enabling it with `rebase = true` first moves its
 //! frame on body B to where body A's frame is now, `F_B ← X_B⁻¹ X_A F_A` (poses `X`), so the joint
@@ -12,7 +13,8 @@ use nalgebra::Isometry3;
 use super::World;
 use crate::dynamics::error::ControlError;
 use crate::dynamics::ids::JointId;
-use crate::solver::Mlcp;
+use crate::dynamics::shadow::TooManyShadows;
+use crate::solver::{Mlcp, Variant};
 
 impl World {
     /// Enables or disables a joint; `rebase` (when enabling) latches it at the current relative
@@ -34,6 +36,20 @@ impl World {
         }
         j.enabled = enabled;
         Ok(())
+    }
+
+    /// Has every island problem also solved by each of `variants` (at most
+    /// [`MAX_SHADOWS`](crate::dynamics::MAX_SHADOWS)), their answers discarded and their time,
+    /// pivot steps, status and deviation from the world's own answer recorded in
+    /// [`IslandStats::shadow`](crate::dynamics::IslandStats::shadow) (`shadow.rs`). An empty list
+    /// turns it off (the default). The trajectory does not change.
+    pub fn set_shadow_variants(&mut self, variants: &[Variant]) -> Result<(), TooManyShadows> {
+        self.ws.shadows.set_variants(variants)
+    }
+
+    /// The shadow variants, in the order of [`IslandStats::shadow`](crate::dynamics::IslandStats::shadow).
+    pub fn shadow_variants(&self) -> impl Iterator<Item = Variant> + '_ {
+        self.ws.shadows.variants()
     }
 
     /// Turns capturing of the island problems on or off (off by default; on, every step clones

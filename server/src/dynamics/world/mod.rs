@@ -83,6 +83,7 @@ impl World {
         for s in self.ws.solvers.iter_mut().chain(self.ws.proj_solvers.iter_mut()) {
             s.set_options(settings.solver);
         }
+        self.ws.shadows.set_options(settings.solver);
         Ok(())
     }
 
