@@ -11,7 +11,8 @@ pub enum Variant {
     Full,
     /// Alg. 2: dense `L₀ = chol(A)` once, then per step copy + row/column deletions (dense).
     Downdate,
-    /// Alg. 2 + 3: Cuthill–McKee, envelope storage, deletions from `L₀` restricted to the skyline.
+    /// Alg. 2 + 3: Cuthill–McKee, envelope storage, deletions from `L₀` restricted to the skyline
+    /// (from the last step's factor when the tight set only grew).
     #[default]
     Skyline,
     /// Envelope refactor of the masked `A` (tight rows → identity) at every pivot step.

@@ -126,7 +126,13 @@ impl Solver {
                 if !any_tight {
                     return FactorIn::L0;
                 }
-                self.delete_from_l0();
+                if self.tight_only_grew() {
+                    // Deletion commutes: the factor of the last step with the new tight indices
+                    // deleted is the copy of `L₀` with all of them deleted, for less work.
+                    self.delete_new_from_l();
+                } else {
+                    self.delete_from_l0();
+                }
                 FactorIn::L
             }
             Variant::SkylineRefactor => {
@@ -225,7 +231,7 @@ impl Solver {
             + wc * self.env.cost_copy_from(self.env.first_column_of_row(tmin.min(lmin)))
             + wd * del_all;
         // (b) further deletions from the current factor, when T only grew.
-        let grew = self.l_valid && (0..m).all(|i| !self.tight_l[i] || self.tight[i]);
+        let grew = self.tight_only_grew();
         let cost_b = if grew {
             wd * (0..m)
                 .filter(|&i| self.tight[i] && !self.tight_l[i])
@@ -240,16 +246,7 @@ impl Solver {
         let cost_c = wf * self.env.cost_factor_from(c);
         if cost_b <= cost_a && cost_b <= cost_c {
             self.stats.auto_choices[1] += 1;
-            let t = Instant::now();
-            for i in 0..m {
-                if self.tight[i] && !self.tight_l[i] {
-                    self.env.delete_pending(&mut self.l, i, &mut self.sigma, end, &self.tight);
-                    self.stats.deletions += 1;
-                }
-            }
-            self.tight_l.copy_from_slice(&self.tight);
-            self.stats.downdate_us += us(t);
-            self.measure_error(false);
+            self.delete_new_from_l();
         } else if cost_a <= cost_c {
             self.stats.auto_choices[0] += 1;
             self.delete_from_l0();
@@ -259,6 +256,28 @@ impl Solver {
             self.incremental();
         }
         FactorIn::L
+    }
+
+    /// Whether the current factor `L` is valid and the tight set only grew since it was made.
+    fn tight_only_grew(&self) -> bool {
+        self.l_valid && self.tight_l.iter().zip(&self.tight).all(|(&was, &is)| !was || is)
+    }
+
+    /// Deletes from the current factor `L` the indices that became tight since it was made
+    /// (each skipping the columns of the other tight indices).
+    fn delete_new_from_l(&mut self) {
+        let m = self.ap.n();
+        let t = Instant::now();
+        let end = self.free_end();
+        for i in 0..m {
+            if self.tight[i] && !self.tight_l[i] {
+                self.env.delete_pending(&mut self.l, i, &mut self.sigma, end, &self.tight);
+                self.stats.deletions += 1;
+            }
+        }
+        self.tight_l.copy_from_slice(&self.tight);
+        self.stats.downdate_us += us(t);
+        self.measure_error(false);
     }
 
     /// `skyline`: copy the columns of `L₀` from `min T` on, then delete every tight index.

@@ -148,7 +148,14 @@
 //! of the tight indices still to be deleted (`Envelope::delete_pending`: `chol(A_FF)` is `L₀`'s free
 //! block after one rank-1 update per tight column, each rotating through free columns only;
 //! measured on the forwarder, whose grasp deletes many rows: mean solve per step with `skyline`
-//! 236 → 150 µs; in the report 0.5× → 0.9× the speed of `full`). `skyline-refactor`: envelope factor of `A_FF ⊕ I` per step.
+//! 236 → 150 µs; in the report 0.5× → 0.9× the speed of `full`). When the tight set only grew
+//! since the last pivot step, `skyline` deletes just the new tight indices from the factor it has
+//! (deletions commute, so this is the copy of `L₀` with all of them deleted, less the work already
+//! done; still no refactorization). Measured paired against `full` on the same problems
+//! (`run --variant full --shadow skyline`): forwarder 0.91× → 1.26× (steps with tight rows 0.82× →
+//! 1.18×), winch 5.1× → 6.0×, forklift 2.1× → 2.2×; alone, the forwarder's steps with tight rows
+//! 171–201 → 121–129 µs against `full`'s 153–159, its longest solve 6.2–8.1 → 3.0–3.1 ms, the
+//! vehicle's 7.0 → 3.0 ms. `skyline-refactor`: envelope factor of `A_FF ⊕ I` per step.
 //! `incremental`: keep the last factor and refactor from the first index whose state changed.
 //! `auto`: per step the cheapest predicted of deletions from `L₀`, deletions from the last factor
 //! (when `T` only grew) and the incremental refactor, from the skyline cost model; `L₀` itself is
