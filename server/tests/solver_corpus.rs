@@ -267,3 +267,39 @@ fn the_projection_arc_shortens_the_vehicles_hard_solves() {
     eprintln!("pivot steps of the four: {} without the arc, {} with it", total[0], total[1]);
     assert!(4 * total[1] <= 3 * total[0], "the arc saved too little: {total:?}");
 }
+
+/// `skyline` continues from its last factor when the tight set only grew (`bpp/factor.rs`): on
+/// the corpus's multi-step solves that path runs (fewer deletions than `Σ |T|` over the steps,
+/// which copying `L₀` and deleting every tight index would take), every factor it produces
+/// matches a refactorization from scratch (the solver's measured deletion error), and each
+/// converged answer is `full`'s to the solver's tolerance.
+#[test]
+fn skyline_deletions_from_its_last_factor_match_a_refactor_and_full() {
+    let mut continued = 0;
+    for (name, p) in corpus() {
+        let opts = SolverOptions { max_steps: 100, measure_deletion_error: true, ..SolverOptions::default() };
+        let mut sky = Solver::new(SolverOptions { variant: Variant::Skyline, ..opts });
+        let mut full = Solver::new(SolverOptions { variant: Variant::Full, ..opts });
+        let (mut ls, mut lf) = (vec![0.0; p.n()], vec![0.0; p.n()]);
+        let st = sky.solve(&p, &mut ls).clone();
+        let sf = full.solve(&p, &mut lf).clone();
+        let all_tight: usize = st.tight_per_step.iter().map(|&t| t as usize).sum();
+        if st.deletions > 0 && st.deletions < all_tight {
+            continued += 1;
+        }
+        if let Some(e) = st.deletion_error {
+            assert!(e <= 1e-9, "{name}: relative deletion error {e}");
+        }
+        if st.status == SolveStatus::Converged && sf.status == SolveStatus::Converged {
+            let (r, _, viol) = judge(&p, &ls);
+            assert!(r <= 1e-9 && viol <= 1e-9, "{name}: residual {r}, violation {viol}");
+            let scale = lf.iter().fold(0.0f64, |a, &x| a.max(x.abs())).max(f64::MIN_POSITIVE);
+            let dev = ls.iter().zip(&lf).fold(0.0f64, |a, (&x, &y)| a.max((x - y).abs())) / scale;
+            println!(
+                "{name}: {} steps, {} deletions of {all_tight}, deviation from full {dev:.1e}",
+                st.pivot_steps, st.deletions
+            );
+        }
+    }
+    assert!(continued >= 3, "the continuation ran on {continued} files only");
+}
