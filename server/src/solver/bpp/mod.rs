@@ -444,11 +444,15 @@ impl Solver {
         if self.stats.pivot_steps >= self.opts.max_steps || self.stats.pivot_steps >= self.ipm_at {
             return true;
         }
+        self.past_deadline()
+    }
+
+    /// Whether the solve's deadline has passed (then `out_of_time` is set).
+    pub(super) fn past_deadline(&mut self) -> bool {
         if self.solve_deadline.is_some_and(|d| Instant::now() >= d) {
             self.out_of_time = true;
-            return true;
         }
-        false
+        self.out_of_time
     }
 
     /// Statistics of the last solve.
@@ -476,8 +480,10 @@ impl Solver {
         }
         if variant == Variant::Pgs {
             self.solve_pgs(p, lambda);
-            self.stats.total_us = us(t_start);
+            // CPU clock read inside the wall clock's interval (read second at the start, first at
+            // the end), so that the CPU time never exceeds the wall time by a slow clock read.
             self.stats.cpu_us = cpu_us(cpu_start);
+            self.stats.total_us = us(t_start);
             return &self.stats;
         }
         let t = Instant::now();
@@ -524,8 +530,8 @@ impl Solver {
         }
         self.stats.solve_us += us(t);
         self.report(converged, known_residual, lambda);
-        self.stats.total_us = us(t_start);
         self.stats.cpu_us = cpu_us(cpu_start);
+        self.stats.total_us = us(t_start);
         &self.stats
     }
 

@@ -131,8 +131,7 @@ impl Solver {
         inverse_diagonal(&self.ap, &mut self.inv_diag);
         let mut done = 0;
         while done < sweeps {
-            if self.solve_deadline.is_some_and(|d| std::time::Instant::now() >= d) {
-                self.out_of_time = true;
+            if self.past_deadline() {
                 break;
             }
             if !pgs_sweep(
