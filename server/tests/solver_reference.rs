@@ -345,3 +345,21 @@ fn a_solve_reports_its_cpu_time_within_its_wall_time() {
         );
     }
 }
+
+/// The profile numbers a solve reports are those of its ordering, computed independently here
+/// from the input matrix and the same (deterministic) reverse Cuthill–McKee permutation.
+#[test]
+fn reported_bandwidth_and_envelope_are_those_of_the_ordering() {
+    use pivotsim_server::solver::ordering::{self, OrderingWorkspace};
+    for (n, bw, seed) in [(120, 6, 31), (300, 12, 32)] {
+        let p = banded_problem(n, bw, seed, 0.3);
+        let (_, st) = solve(&p, Variant::Auto, 100);
+        let (mut perm, mut inv) = (Vec::new(), Vec::new());
+        OrderingWorkspace::new().order(p.a(), OrderingKind::ReverseCuthillMcKee, &mut perm, &mut inv);
+        assert_eq!(st.bandwidth_before, ordering::bandwidth(p.a()));
+        assert_eq!(st.envelope_before, ordering::envelope(p.a()));
+        assert_eq!(st.bandwidth_after, ordering::bandwidth_permuted(p.a(), &inv));
+        assert_eq!(st.envelope_after, ordering::envelope_permuted(p.a(), &inv));
+        assert!(st.envelope_after < st.envelope_before, "n={n}: the shuffled band came back");
+    }
+}

@@ -571,11 +571,13 @@ impl Solver {
                 let at = cols.binary_search(&i).map_or(usize::MAX, |q| self.ap.row_ptr()[i] + q);
                 self.diag_at.push(at);
             }
+            // From the rows' first and last columns: O(m) each, on the permuted copy just built
+            // (the same numbers as `*_permuted` on the input, without their O(nnz) gathers).
             self.metrics = [
                 ordering::bandwidth(p.a()),
                 ordering::envelope(p.a()),
-                ordering::bandwidth_permuted(p.a(), &self.inv),
-                ordering::envelope_permuted(p.a(), &self.inv),
+                ordering::bandwidth(&self.ap),
+                ordering::envelope(&self.ap),
             ];
         }
         [
