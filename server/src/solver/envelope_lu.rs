@@ -24,16 +24,13 @@ use super::envelope::Envelope;
 /// Smallest pivot, relative to the row's diagonal of `K`, that the elimination accepts.
 const PIVOT_FLOOR: f64 = 1e-13;
 
-/// `|K_jj|` before elimination.
-fn scale_j(a: &SymCsr, d: &[f64], j: usize) -> f64 {
-    (a.get(j, j) + d[j]).abs()
-}
-
 /// An LU factor on an [`Envelope`]; buffers reused between factorizations.
 #[derive(Debug, Clone, Default)]
 pub struct EnvelopeLu {
     lo: Vec<f64>,
     up: Vec<f64>,
+    /// `|K_jj|` before elimination (the pivots' scale), filled while `K` is scattered.
+    scale: Vec<f64>,
 }
 
 /// Why a factorization failed.
@@ -69,9 +66,14 @@ impl EnvelopeLu {
         self.up.resize(len, 0.0);
         let s = env.skyline();
         // Scatter K: row j's entries from the diagonal on give U's row j and L's column j.
+        self.scale.clear();
+        self.scale.resize(m, 0.0);
         for j in 0..m {
             let (cols, vals) = a.row(j);
             for (&p, &v) in cols.iter().zip(vals) {
+                if p == j {
+                    self.scale[j] = v;
+                }
                 if p >= j {
                     let at = env.index(p, j);
                     self.up[at] += v;
@@ -81,6 +83,7 @@ impl EnvelopeLu {
                 }
             }
             self.up[env.index(j, j)] += d[j];
+            self.scale[j] = (self.scale[j] + d[j]).abs();
         }
         for i in 0..m {
             let Some(c) = cpl[i] else { continue };
@@ -124,7 +127,7 @@ impl EnvelopeLu {
                 }
             }
             let piv = self.up[cj];
-            if !(piv.is_finite() && piv.abs() > PIVOT_FLOOR * scale_j(a, d, j)) {
+            if !(piv.is_finite() && piv.abs() > PIVOT_FLOOR * self.scale[j]) {
                 return Err(LuError::Pivot { row: j, value: piv });
             }
             let inv = 1.0 / piv;
