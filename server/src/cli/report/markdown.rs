@@ -213,7 +213,7 @@ fn paired(w: &mut String, r: &Report) {
     );
     let _ = writeln!(w, "|---|---|---|---|---|---|---|---|---|");
     for s in &r.scenes {
-        let [sky, auto] = [0, 1].map(|i| s.paired.get(i));
+        let [sky, auto] = ["skyline", "auto"].map(|v| s.paired.iter().find(|x| x.variant == v));
         let (Some(sky), Some(auto)) = (sky, auto) else { continue };
         // `speedup` is the shadow's time over full's: full's over the shadow's is its inverse.
         let inv = |x: f64| if x > 0.0 { format!("{:.1}×", 1.0 / x) } else { "—".into() };

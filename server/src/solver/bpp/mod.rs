@@ -390,14 +390,11 @@ pub struct Solver {
     /// The last exact solution of the problem with frozen friction bounds, if any (`have_frozen`).
     frozen: Vec<f64>,
     have_frozen: bool,
-    /// `‖A_i‖₁` of each permuted row (`find_infeasible`).
     /// Position of each row's diagonal in `ap`'s values (per pattern).
     diag_at: Vec<usize>,
-    /// Set when a solve converges at an iterate whose `w` was computed from its `λ` and neither
-    /// changed since (the safe answer then needs no second `w = Aλ − b`).
-    w_current: bool,
-    /// The residual `(abs, rel)` of that iterate.
-    converged_residual: (f64, f64),
+    /// The residual `(abs, rel)` the pivoting converged at, set where it returns with `λ` and `w`
+    /// still that iterate's (the safe answer then needs no second `w = Aλ − b` and residual).
+    converged_at: Option<(f64, f64)>,
     /// Set by `make_safe` when it left `λ` and `w` as they were.
     safe_unchanged: bool,
     /// The solve must stop by then (time budget), if set.
@@ -505,7 +502,7 @@ impl Solver {
             self.opts.ipm_after
         };
         let mut converged = self.bpp_loop(variant, has_friction, warm || !has_friction);
-        let w_current = converged && self.w_current;
+        let converged_at = if converged { self.converged_at } else { None };
         if !converged && !self.needs_prox && self.ipm_due() {
             converged = self.interior_point_with_crossover(variant, has_friction);
         }
@@ -517,11 +514,11 @@ impl Solver {
         let t = Instant::now();
         let mut known_residual = None;
         if converged {
-            let w_current = w_current && !self.needs_prox;
-            self.stats.energy_scaled = self.make_safe(w_current);
-            if w_current && self.safe_unchanged {
+            let converged_at = converged_at.filter(|_| !self.needs_prox);
+            self.stats.energy_scaled = self.make_safe(converged_at.is_some());
+            if self.safe_unchanged {
                 // `λ` and `w` are still the pair whose residual ended the loop.
-                known_residual = Some(self.converged_residual);
+                known_residual = converged_at;
             }
         } else {
             self.choose_capped();
@@ -632,7 +629,7 @@ impl Solver {
         });
         self.outer_hist = [0.0; OUTER_MEMORY];
         self.needs_prox = false;
-        self.w_current = false;
+        self.converged_at = None;
         self.prox_shift = 0.0;
         resize(&mut self.warm_lam, m);
         resize(&mut self.lam_hat, m);
@@ -779,8 +776,7 @@ impl Solver {
         self.have_frozen = true;
         if res_rel <= self.opts.tol_rel || res == 0.0 {
             // `w` is the one this residual was computed from.
-            self.w_current = true;
-            self.converged_residual = (res, res_rel);
+            self.converged_at = Some((res, res_rel));
             return Next::Return(true);
         }
         if friction && self.opts.coupled_update {
