@@ -41,6 +41,24 @@
 //! | pivoting alone (earlier defaults) | 15 | 22 | 11 | 21 | 266 ms |
 //! | switch after 3 steps, cold only (`ipm_cold_after = 3`, the default) | 15 | 22 | 25 | 26 | 105 ms |
 //! | switch after 3 steps, every solve (`ipm_after = 3`) | 25 | 28 | 25 | 26 | 105 ms |
+//! | the default, crossover from a stalled run below 1e-4 (was 1e-6; now) | 15 | 22 | 26 | 28 | 0.83× |
+//! | every solve, crossover below 1e-4 (now) | 26 | 28 | 26 | 28 | 0.83× |
+//!
+//! (The crossover threshold, measured later: the winch's sliding chains at 1e-10 stall at
+//! 1e-5…2e-5 — `hard00`, `hard02` — and with `CROSSOVER_BELOW = 1e-6` went back to the pivoting's
+//! own start, 103–107 steps; from the stalled run's index set they need 32–48. Total cold time at
+//! cap 100, paired on the same machine: 121 → 100 ms. A patience of 3–5 instead of 8 crosses
+//! over too early: `winch-c1e-10-hard03`, which wanders for 20 iterations at 1e-5 and then
+//! converges, never does from its index set at 4e-5 (300+ steps); crossing over from the run's
+//! best iterate rather than its last, and semismooth Newton before the pivoting, moved single
+//! files both ways and cost the winch at 1e-10 in simulation 3 → 9 capped solves. Unbounded, the
+//! crossover from a stalled run can be a dead end: a generated crane-shaped island, `m = 430`,
+//! seed 5 of `generate::contact_like`, went from 44 steps to 1,000+ — hence a trial of
+//! `CROSSOVER_TRIAL = 30` steps, after which the pivoting goes back to its own start: that file
+//! then needs 74; 15 would lose `winch-c1e-10-hard00`, 27 steps after its crossover. In simulation
+//! at the paper's cap, the winch — the one scene that switches warm solves, `ipm_after = 4` — keeps
+//! 0 capped solves as shipped and 3 at contact compliance 1e-10, their largest residual 5e-4 →
+//! 2.3e-5.)
 //!
 //! Switching at once (`0`) costs the problems the pivoting finishes in 2 steps (a Siconos box
 //! stack: 29 iterations to 7e-9) and a generated crane island (34 → 64 steps): hence after 3.
@@ -78,8 +96,12 @@ use super::{Solver, resize};
 const IPM_PATIENCE: usize = 8;
 /// Pivot steps from a converged interior point's index set to its exact solution.
 const CROSSOVER_STEPS: usize = 3;
-/// A run that stopped short hands its index set to the pivoting only below this residual.
-const CROSSOVER_BELOW: f64 = 1e-6;
+/// A run that stopped short hands its index set to the pivoting only below this residual
+/// (measured on the corpus: 1e-6 sent the winch's sliding chains at 1e-10, whose runs wander at
+/// 1e-5…1e-4, back to the pivoting's own start; 1e-4 … 1e-2 count the same files).
+const CROSSOVER_BELOW: f64 = 1e-4;
+/// Pivot steps the pivoting gets from a stalled run's index set before it goes back to its own.
+const CROSSOVER_TRIAL: usize = 30;
 /// Fraction of the step to the boundary.
 const TO_BOUNDARY: f64 = 0.995;
 
@@ -102,8 +124,9 @@ impl Solver {
     /// - converged: at most `CROSSOVER_STEPS` pivot steps to the exact solution of that index set
     ///   (a vertex answer, and a warm start the next step can reuse in one step); when they do not
     ///   converge, the interior point's own answer stands;
-    /// - not converged but within `CROSSOVER_BELOW`: pivoting from its index set for the steps left;
-    /// - else pivoting resumes from the index set it had before the switch.
+    /// - not converged but within `CROSSOVER_BELOW`: pivoting from its index set for at most
+    ///   `CROSSOVER_TRIAL` steps, then (or at once when the run ended farther off) pivoting
+    ///   resumes from the index set it had before the switch.
     pub(super) fn interior_point_with_crossover(&mut self, variant: super::Variant, friction: bool) -> bool {
         self.save_point();
         if self.interior_point() {
@@ -125,10 +148,18 @@ impl Solver {
         if self.stop_now() {
             return false;
         }
-        if self.ipm.best > CROSSOVER_BELOW {
-            // Far from a solution: its index set says little; back to where the pivoting was.
-            self.restore_point();
+        if self.ipm.best <= CROSSOVER_BELOW {
+            // Near a solution: pivoting from its index set, for a bounded trial.
+            self.ipm_at = self.stats.pivot_steps.saturating_add(CROSSOVER_TRIAL);
+            let exact = self.bpp_loop(variant, friction, true);
+            self.ipm_at = usize::MAX;
+            if exact || self.stop_now() {
+                return exact;
+            }
         }
+        // Far from a solution (its index set says little), or the trial failed: back to where
+        // the pivoting was.
+        self.restore_point();
         self.bpp_loop(variant, friction, true)
     }
 
