@@ -327,6 +327,8 @@ pub struct Solver {
     kry_z: Vec<f64>,
     lam_old: Vec<f64>,
     lam_hat: Vec<f64>,
+    /// `w` at `lam_hat` (the safeguard's Newton point).
+    w_hat: Vec<f64>,
     w_old: Vec<f64>,
     w: Vec<f64>,
     best: Vec<f64>,

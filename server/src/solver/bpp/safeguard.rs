@@ -41,7 +41,7 @@ impl Solver {
     /// their bounds (after an outer update of the friction boxes, [`Start::IndexSet`]).
     pub(super) fn projected_newton(&mut self, variant: Variant, start: Start) -> bool {
         let m = self.ap.n();
-        for v in [&mut self.lam_old, &mut self.w_old, &mut self.lam_hat] {
+        for v in [&mut self.lam_old, &mut self.w_old, &mut self.lam_hat, &mut self.w_hat] {
             resize(v, m);
         }
         // Start from the projection of the current iterate onto the box.
@@ -88,6 +88,7 @@ impl Solver {
             // `projected_arc`, the shorter points of the projection arc down to the ratio test's
             // `α` (below it the arc is the plain segment, whose exact step comes next).
             self.lam_hat.copy_from_slice(&self.lam);
+            self.w_hat.copy_from_slice(&self.w);
             if self.projected_arc_step(alpha) {
                 self.stats.projected_steps += 1;
                 self.set_binding_set();
@@ -187,7 +188,7 @@ impl Solver {
                 self.lam[i] = x.max(self.lo_eff[i]).min(self.hi_eff[i]);
                 gd += self.w_old[i] * (self.lam[i] - self.lam_old[i]);
             }
-            self.compute_w();
+            self.w_along(t);
             let f_p = objective(&self.lam, &self.w, &self.bp);
             let noise = 1e-12 * (f_old.abs() + objective_scale(&self.lam, &self.w, &self.bp));
             if gd < 0.0 && f_p <= f_old + 1e-4 * gd - noise {
@@ -244,7 +245,32 @@ impl Solver {
                 self.lam[i] = x.max(lo).min(hi);
             }
         }
-        self.compute_w();
+        self.w_along(alpha);
+    }
+
+    /// `w = Aλ − b` at `λ`, a point `λ_old + t (λ̂ − λ_old)` of the Newton segment with some of its
+    /// entries moved onto their bounds, from the segment's ends (`w_old`, `w_hat`): `w` is affine
+    /// along the segment, so `w = w_old + t (ŵ − w_old) + Σ_i A_{·i} δ_i` with `δ_i` the moves —
+    /// the columns of the few clipped entries instead of a product with all of `A` (two of the
+    /// three products of a safeguard step; measured on the forwarder's capped grasp solves, where
+    /// the products were a quarter of the time). `x_i` is computed as the callers do, so `δ_i`
+    /// is exactly zero where they did not move `λ_i`.
+    fn w_along(&mut self, t: f64) {
+        let m = self.ap.n();
+        for i in 0..m {
+            self.w[i] = self.w_old[i] + t * (self.w_hat[i] - self.w_old[i]);
+        }
+        for i in 0..m {
+            let x = self.lam_old[i] + t * (self.lam_hat[i] - self.lam_old[i]);
+            let d = self.lam[i] - x;
+            if d != 0.0 {
+                // Column i of the symmetric A is its row i.
+                let (cols, vals) = self.ap.row(i);
+                for (&j, &a) in cols.iter().zip(vals) {
+                    self.w[j] += a * d;
+                }
+            }
+        }
     }
 
     /// Backtracking on `‖r‖²` between `λ_old` (with `w_old`) and the Newton point (in `λ`, `w`;
