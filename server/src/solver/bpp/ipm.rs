@@ -47,8 +47,8 @@
 //! (The crossover threshold, measured later: the winch's sliding chains at 1e-10 stall at
 //! 1e-5…2e-5 — `hard00`, `hard02` — and with `CROSSOVER_BELOW = 1e-6` went back to the pivoting's
 //! own start, 103–107 steps; from the stalled run's index set they need 32–48. Total cold time at
-//! cap 100, paired on the same machine: 121 → 100 ms. A patience of 3–5 instead of 8 crosses
-//! over too early: `winch-c1e-10-hard03`, which wanders for 20 iterations at 1e-5 and then
+//! cap 100, four alternated pairs with the earlier build: 107–141 → 93–117 ms (median ratio
+//! 0.79). A patience of 3–5 instead of 8 crosses over too early: `winch-c1e-10-hard03`, which wanders for 20 iterations at 1e-5 and then
 //! converges, never does from its index set at 4e-5 (300+ steps); crossing over from the run's
 //! best iterate rather than its last, and semismooth Newton before the pivoting, moved single
 //! files both ways and cost the winch at 1e-10 in simulation 3 → 9 capped solves. Unbounded, the
