@@ -271,6 +271,8 @@ impl Solver {
                 }
             }
         }
+        #[cfg(test)]
+        tests::check_w(self);
     }
 
     /// Backtracking on `‖r‖²` between `λ_old` (with `w_old`) and the Newton point (in `λ`, `w`;
@@ -449,4 +451,67 @@ fn natural_residual_sq(lambda: &[f64], w: &[f64], lo: &[f64], hi: &[f64], findex
         acc += r * r;
     }
     if acc.is_nan() { f64::INFINITY } else { acc }
+}
+
+#[cfg(test)]
+mod tests {
+    //! `w_along` against a fresh product: the unit tests of the crate run this check at every
+    //! safeguard step (the integration tests and the product do not).
+
+    use super::super::{Solver, SolverOptions};
+    use crate::solver::io::read_mlcp_file;
+    use crate::solver::{SolveStatus, Variant};
+    use std::cell::Cell;
+
+    thread_local! {
+        /// Checks made, and the largest error seen relative to its row's scale.
+        static CHECKED: Cell<(usize, f64)> = const { Cell::new((0, 0.0)) };
+    }
+
+    /// Compares `w` (from the segment's ends) with `Aλ − b` entry by entry, relative to
+    /// `Σ_j |A_ij λ_j| + |b_i|`, the size of the terms the product sums.
+    pub(super) fn check_w(s: &Solver) {
+        let m = s.ap.n();
+        let mut worst: f64 = 0.0;
+        for i in 0..m {
+            let (cols, vals) = s.ap.row(i);
+            let (mut sum, mut scale) = (-s.bp[i], s.bp[i].abs());
+            for (&j, &a) in cols.iter().zip(vals) {
+                sum += a * s.lam[j];
+                scale += (a * s.lam[j]).abs();
+            }
+            if scale > 0.0 {
+                worst = worst.max((s.w[i] - sum).abs() / scale);
+            }
+        }
+        CHECKED.with(|c| {
+            let (n, w) = c.get();
+            c.set((n + 1, w.max(worst)));
+        });
+    }
+
+    /// The corpus's forwarder grasps and forklift files, warm at the paper's cap: hundreds of
+    /// safeguard steps, every `w` from the segment's ends within 1e-9 of the product's scale.
+    #[test]
+    fn w_along_the_segment_matches_the_product() {
+        let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/corpus");
+        let mut solver = Solver::new(SolverOptions { variant: Variant::Auto, ..Default::default() });
+        let mut solved = 0;
+        for name in [
+            "forwarder-hard00-step000903-island1.txt",
+            "forwarder-hard02-step000904-island1.txt",
+            "forklift-c1e-10-hard00-step000462-island0.txt",
+            "forklift-hard00-step000483-island0.txt",
+        ] {
+            let p = read_mlcp_file(&dir.join(name)).expect("corpus file");
+            let mut lambda = vec![0.0; p.n()];
+            let st = solver.solve(&p, &mut lambda);
+            assert!(matches!(st.status, SolveStatus::Converged | SolveStatus::MaxSteps), "{name}");
+            solved += st.projected_newton_steps;
+        }
+        let (checks, worst) = CHECKED.with(Cell::get);
+        eprintln!("{checks} segment points over {solved} safeguard steps; worst relative error {worst:.1e}");
+        assert!(checks >= 20, "the safeguard took too few steps to test anything ({checks})");
+        assert!(worst <= 1e-9, "w from the segment's ends is {worst:e} off the product");
+    }
 }
