@@ -28,7 +28,8 @@
 //! right-hand side through unchanged, which is the paper's "skip tight indices".
 //!
 //! **Cost model** (for the `auto` variant). In stored-entry units: a deletion at `i` sweeps
-//! `Σ_{k=i+1}^{reach(i)−1} (s_k − k)` entries; a refactor from `c` costs
+//! `Σ_{k=i+1}^{reach(i)−1} (s_k − k)` entries (in `auto`, each column at least a fixed amount: its
+//! rotation's square root and divisions, `bpp/factor.rs`); a refactor from `c` costs
 //! `Σ_{j ≥ c} Σ_{k=g_j}^{j−1} (s_k − j + 1)` multiply–adds; a copy of the columns from `c` on
 //! costs their storage. Prefix sums make each prediction O(1).
 
@@ -380,12 +381,13 @@ impl Envelope {
     }
 
     /// Prefix sums of the stored entries below the diagonal of the columns not marked in
-    /// `pending` (`out[k]`: columns `< k`), for [`Self::cost_delete_pending`]. Reuses `out`.
-    pub fn free_column_sums(&self, pending: &[bool], out: &mut Vec<f64>) {
+    /// `pending`, plus `per_column` for each such column (`out[k]`: columns `< k`), for
+    /// [`Self::cost_delete_pending`]. Reuses `out`.
+    pub fn free_column_sums(&self, pending: &[bool], per_column: f64, out: &mut Vec<f64>) {
         out.clear();
         out.push(0.0);
         for j in 0..self.m {
-            let below = if pending[j] { 0.0 } else { (self.s[j] - j) as f64 };
+            let below = if pending[j] { 0.0 } else { ((self.s[j] - j) as f64).max(per_column) };
             out.push(out[j] + below);
         }
     }
@@ -643,7 +645,7 @@ mod tests {
                 assert!(err < 1e-12, "n={n} frac={frac} err={err}");
                 // The cost model bounds what the sweeps touched.
                 let mut sums = Vec::new();
-                env.free_column_sums(&tight, &mut sums);
+                env.free_column_sums(&tight, 0.0, &mut sums);
                 let predicted: f64 =
                     (0..n).filter(|&i| tight[i]).map(|i| env.cost_delete_pending(i, end, &sums)).sum();
                 assert!(

@@ -7,6 +7,18 @@ use std::time::Instant;
 use super::super::{IndexState, Variant, dense, natural_residual};
 use super::{FactorIn, Solver, resize, us};
 
+/// The least a deletion's rotation of one column costs in the `auto` cost model, in stored
+/// entries: each rotated column first takes a square root and four divisions, a chain through
+/// the swept vector `σ` that its own entries cannot hide when the column is short. Counting
+/// entries only, `auto` re-derived the forwarder's grasp factor 8–10 times per capped solve by
+/// copying `L₀` and deleting all ~100 tight rows (805–1,166 deletions, 1.3–2.2 ms) where an
+/// incremental refactor costs ~50 µs. Measured (corpus files warm at the paper's cap, seven
+/// alternated pairs): the forwarder's three capped grasps −33 % (median ratio 0.67, the same
+/// iterates); forklift, vehicle and winch files 1.01–1.03 (within the noise of ±30 %); a floor of
+/// 30 flipped only part of the grasp's choices, an additive term of 30 slowed the vehicle's
+/// long-column deletions (1.08).
+pub(super) const ROTATION_MIN_ENTRIES: f64 = 60.0;
+
 impl Solver {
     /// Computes what every later step reuses: the dense `L₀`, the envelope and its `L₀`.
     pub(super) fn prepare(&mut self, variant: Variant) {
@@ -221,7 +233,7 @@ impl Solver {
         let end = self.free_end();
         // (a) deletions from L₀ (each skips the columns of the other tight indices).
         let tmin = self.tight.iter().position(|&t| t).unwrap_or(m);
-        self.env.free_column_sums(&self.tight, &mut self.free_sums);
+        self.env.free_column_sums(&self.tight, ROTATION_MIN_ENTRIES, &mut self.free_sums);
         let del_all: f64 = (0..m)
             .filter(|&i| self.tight[i])
             .map(|i| self.env.cost_delete_pending(i, end, &self.free_sums))
