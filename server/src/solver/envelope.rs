@@ -381,7 +381,7 @@ impl Envelope {
     }
 
     /// Prefix sums of the stored entries below the diagonal of the columns not marked in
-    /// `pending`, plus `per_column` for each such column (`out[k]`: columns `< k`), for
+    /// `pending`, each column counted as at least `per_column` (`out[k]`: columns `< k`), for
     /// [`Self::cost_delete_pending`]. Reuses `out`.
     pub fn free_column_sums(&self, pending: &[bool], per_column: f64, out: &mut Vec<f64>) {
         out.clear();

@@ -41,17 +41,18 @@
 //! | pivoting alone (earlier defaults) | 15 | 22 | 11 | 21 | 266 ms |
 //! | switch after 3 steps, cold only (`ipm_cold_after = 3`, the default) | 15 | 22 | 25 | 26 | 105 ms |
 //! | switch after 3 steps, every solve (`ipm_after = 3`) | 25 | 28 | 25 | 26 | 105 ms |
-//! | the default, crossover from a stalled run below 1e-4 (was 1e-6; now) | 15 | 22 | 26 | 28 | 0.83× |
-//! | every solve, crossover below 1e-4 (now) | 26 | 28 | 26 | 28 | 0.83× |
+//! | the default, crossover from a stalled run below 1e-4 (was 1e-6; now) | 15 | 22 | 26 | 28 | 0.79× the row above, paired |
+//! | every solve, crossover below 1e-4 (now) | 26 | 28 | 26 | 28 | — |
 //!
 //! (The crossover threshold, measured later: the winch's sliding chains at 1e-10 stall at
 //! 1e-5…2e-5 — `hard00`, `hard02` — and with `CROSSOVER_BELOW = 1e-6` went back to the pivoting's
 //! own start, 103–107 steps; from the stalled run's index set they need 32–48. Total cold time at
 //! cap 100, four alternated pairs with the earlier build: 107–141 → 93–117 ms (median ratio
-//! 0.79). A patience of 3–5 instead of 8 crosses over too early: `winch-c1e-10-hard03`, which wanders for 20 iterations at 1e-5 and then
-//! converges, never does from its index set at 4e-5 (300+ steps); crossing over from the run's
-//! best iterate rather than its last, and semismooth Newton before the pivoting, moved single
-//! files both ways and cost the winch at 1e-10 in simulation 3 → 9 capped solves. Unbounded, the
+//! 0.79). A patience of 3–5 instead of 8 crosses over too early: `winch-c1e-10-hard03`, which
+//! wanders for 20 iterations at 1e-5 and then converges, never does from its index set at 4e-5
+//! (300+ steps); crossing over from the run's best iterate rather than its last, and semismooth
+//! Newton before the pivoting, moved single files both ways and cost the winch at 1e-10 in
+//! simulation 3 → 9 capped solves. Unbounded, the
 //! crossover from a stalled run can be a dead end: a generated crane-shaped island, `m = 430`,
 //! seed 5 of `generate::contact_like`, went from 44 steps to 1,000+ — hence a trial of
 //! `CROSSOVER_TRIAL = 30` steps, after which the pivoting goes back to its own start: that file
