@@ -134,7 +134,7 @@
 //! iteration, each counted as a pivot step), then crosses over to the exact solution of the index
 //! set it identifies. Redundant contact sets and friction that cycles — what makes the corpus
 //! hard — cost it nothing special: 12–22 iterations where pivoting needs up to 300. On by default
-//! for cold solves (corpus cold within 35 steps 11 → 26 of 30, within 100 21 → 28); for warm ones
+//! for cold solves (corpus cold within 35 steps 11 → 27 of 30, within 100 21 → 30, with a second start for a stalled run); for warm ones
 //! a scene setting (measured mixed in simulation, see `ipm.rs`).
 //!
 //! **Semidefinite `A`.** When the factorization has to regularize pivots, the solve switches to
