@@ -89,7 +89,13 @@ fn interior_point_finds_an_enumerated_solution_with_friction() {
             let mut s = Solver::new(opts);
             let mut lam = vec![0.0; n];
             let st = s.solve(q, &mut lam).clone();
-            assert_eq!(st.ipm_runs, 1, "seed {seed} {kind}: the interior point method did not run");
+            // One run, or two when the first stalls and its crossover trial fails (a restart from
+            // the second start, `ipm.rs`).
+            assert!(
+                (1..=2).contains(&st.ipm_runs),
+                "seed {seed} {kind}: {} interior point runs",
+                st.ipm_runs
+            );
             assert!(st.ipm_iterations >= 1 && st.pivot_steps >= st.ipm_iterations, "seed {seed} {kind}");
             assert_eq!(st.status, SolveStatus::Converged, "seed {seed} {kind}: residual {}", st.residual_rel);
             let nearest = sols.iter().map(|s| max_diff(&lam, &s.lambda)).fold(f64::INFINITY, f64::min);
