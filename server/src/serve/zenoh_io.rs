@@ -1,17 +1,31 @@
 //! Zenoh transport: a peer session (listening on `tcp/127.0.0.1:7447` by default, multicast
-//! scouting off unless asked), publishers `pivotsim/<world>/poses` and `…/stats` (congestion
-//! control *drop*, express: a slow subscriber loses frames, it never slows the loop), one
-//! subscriber on `…/cmd/**` for every input topic, and the queryables `…/scene` (the encoded
-//! description) and `…/control` (requests answered by the loop thread).
+//! scouting off unless asked), publishers `pivotsim/<world>/poses`, `…/stats` and `…/signals`
+//! (congestion control *drop*, express: a slow subscriber loses frames, it never slows the
+//! loop), the events publisher `…/events` (below), one subscriber on `…/cmd/**` for every input
+//! topic, and the queryables `…/scene` (the encoded description) and `…/control` (requests
+//! answered by the loop thread).
+//!
+//! Events (faults, rejected faults, operator warnings) are not frames: each is sent once, and a
+//! lost one is lost for good. With *drop*, the events frame — the fourth message of a step's
+//! burst, on the same priority queue as the three frames before it — was the one Zenoh threw
+//! away when its transmit task had not emptied the queue within its drop wait (seen on a loaded
+//! two-core machine: a live fault that never reached the ROS bridge). So events go out on their
+//! own priority ([`EVENTS_PRIORITY`], a queue of their own, empty but for them) with congestion
+//! control *block*, from a thread of their own fed by a bounded channel: the loop hands the
+//! frame over without waiting, a congested link delays events instead of losing them, and only
+//! a channel full of [`EVENTS_BACKLOG`] undelivered frames (a link stuck for that many event
+//! steps) drops one, counted and logged.
 
+use std::sync::mpsc::{SyncSender, TrySendError, sync_channel};
 use std::sync::{Arc, RwLock};
+use std::thread::JoinHandle;
 use std::time::Duration;
 
 use pivotsim_msgs as msgs;
 use zenoh::Wait;
 use zenoh::liveliness::LivelinessToken;
 use zenoh::pubsub::{Publisher, Subscriber};
-use zenoh::qos::CongestionControl;
+use zenoh::qos::{CongestionControl, Priority};
 use zenoh::query::Queryable;
 
 use super::{ErrorThrottle, Frames, Inbound, InboxSender, ServeError, Transport, ZenohOptions};
@@ -60,13 +74,71 @@ fn claim_world(session: &zenoh::Session, world: &msgs::WorldName) -> Result<Live
     session.liveliness().declare_token(key).wait().map_err(err)
 }
 
+/// The priority of the events publisher: above the frames' (`Data`), so that events have a
+/// transmit queue of their own that the frames never fill.
+pub const EVENTS_PRIORITY: Priority = Priority::DataHigh;
+
+/// Events frames handed to the events thread and not yet sent before the loop drops one.
+pub const EVENTS_BACKLOG: usize = 256;
+
+/// The events publisher's thread: sends every frame it is handed, blocking on congestion.
+struct EventsSender {
+    tx: Option<SyncSender<Vec<u8>>>,
+    thread: Option<JoinHandle<()>>,
+    throttle: ErrorThrottle,
+}
+
+impl EventsSender {
+    fn spawn(publisher: Publisher<'static>) -> Result<EventsSender, ServeError> {
+        let (tx, rx) = sync_channel::<Vec<u8>>(EVENTS_BACKLOG);
+        let thread = std::thread::Builder::new()
+            .name("zenoh-events".into())
+            .spawn(move || {
+                let mut throttle = ErrorThrottle::default();
+                for frame in rx {
+                    if let Err(e) = publisher.put(frame).wait() {
+                        throttle.fail("zenoh events", &e);
+                    }
+                }
+            })
+            .map_err(err)?;
+        Ok(EventsSender { tx: Some(tx), thread: Some(thread), throttle: ErrorThrottle::default() })
+    }
+
+    /// Hands a frame to the thread without waiting; a full backlog drops it (counted).
+    fn send(&mut self, frame: &[u8]) {
+        let Some(tx) = &self.tx else { return };
+        match tx.try_send(frame.to_vec()) {
+            Ok(()) => {}
+            Err(TrySendError::Full(_)) => self
+                .throttle
+                .fail("zenoh events", &format!("{EVENTS_BACKLOG} frames undelivered, one dropped")),
+            Err(TrySendError::Disconnected(_)) => {
+                self.throttle.fail("zenoh events", &"the events thread ended")
+            }
+        }
+    }
+}
+
+impl Drop for EventsSender {
+    /// Closes the channel and waits for the thread to send what it holds (a put blocks at most
+    /// until Zenoh gives up on a stuck link).
+    fn drop(&mut self) {
+        drop(self.tx.take());
+        if let Some(t) = self.thread.take() {
+            let _ = t.join();
+        }
+    }
+}
+
 /// The server's Zenoh side.
 pub struct ZenohTransport {
+    // Declared first: dropped (its queued events sent) while the session is open.
+    events: EventsSender,
     session: zenoh::Session,
     poses: Publisher<'static>,
     stats: Publisher<'static>,
     signals: Publisher<'static>,
-    events: Publisher<'static>,
     _inputs: Subscriber<()>,
     _scene: Queryable<()>,
     _control: Queryable<()>,
@@ -105,7 +177,15 @@ impl ZenohTransport {
         let poses = publisher(msgs::Topic::Poses)?;
         let stats = publisher(msgs::Topic::Stats)?;
         let signals = publisher(msgs::Topic::Signals)?;
-        let events = publisher(msgs::Topic::Events)?;
+        let events = EventsSender::spawn(
+            session
+                .declare_publisher(world.key(msgs::Topic::Events))
+                .congestion_control(CongestionControl::Block)
+                .priority(EVENTS_PRIORITY)
+                .express(true)
+                .wait()
+                .map_err(err)?,
+        )?;
         let tx = inbox.clone();
         let inputs = session
             .declare_subscriber(msgs::inputs_wildcard(world))
@@ -181,10 +261,8 @@ impl Transport for ZenohTransport {
         if let Err(e) = self.signals.put(frames.signals.to_vec()).wait() {
             self.throttle.fail("zenoh signals", &e);
         }
-        if !frames.events.is_empty()
-            && let Err(e) = self.events.put(frames.events.to_vec()).wait()
-        {
-            self.throttle.fail("zenoh events", &e);
+        if !frames.events.is_empty() {
+            self.events.send(frames.events);
         }
     }
 
