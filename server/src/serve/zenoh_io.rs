@@ -5,7 +5,7 @@
 //! topic, and the queryables `…/scene` (the encoded description) and `…/control` (requests
 //! answered by the loop thread).
 //!
-//! Events (faults, rejected faults, operator warnings) are not frames: each is sent once, and a
+//! Events (thresholds raised and cleared, faults, refused faults) are not frames: each is sent once, and a
 //! lost one is lost for good. With *drop*, the events frame — the fourth message of a step's
 //! burst, on the same priority queue as the three frames before it — was the one Zenoh threw
 //! away when its transmit task had not emptied the queue within its drop wait (seen on a loaded
