@@ -185,6 +185,7 @@ use std::time::Instant;
 use super::envelope::Envelope;
 use super::ordering::{self, OrderingWorkspace};
 use super::pgs::{PgsOptions, PgsWorkspace, pgs_solve};
+use super::problem::reserve_touched;
 use super::{IndexState, Mlcp, OrderingKind, SolveStats, SolveStatus, SymCsr, Variant, effective_bounds};
 
 /// Options of a [`Solver`].
@@ -1138,6 +1139,7 @@ pub(super) fn us(t: Instant) -> f64 {
 }
 
 pub(super) fn resize(v: &mut Vec<f64>, m: usize) {
+    reserve_touched(v, m, 0.0);
     v.clear();
     v.resize(m, 0.0);
 }
@@ -1147,6 +1149,7 @@ pub(super) fn resize(v: &mut Vec<f64>, m: usize) {
 /// stored entry). Zeroing them was three `memset`s of the whole envelope per solve (6 % of the
 /// crane's solve instructions).
 pub(super) fn size_to(v: &mut Vec<f64>, m: usize) {
+    reserve_touched(v, m, 0.0);
     if v.len() < m {
         v.resize(m, 0.0);
     } else {
