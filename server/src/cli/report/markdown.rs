@@ -129,7 +129,9 @@ fn table3(w: &mut String, r: &Report) {
         "Mean solve time per step (all islands of the step) over the steps with tight rows, as the paper \
          averages, in ms, and the speed-up over `full` (the paper's \"full Cholesky\"); then p99 and max over \
          every step, which an operator feels. The paper's `full`, `downdating` and `downdating skyline` \
-         (Intel i7-5820K) beside.\n"
+         (Intel i7-5820K) beside. Each variant ran {} time(s), in rounds that run every variant once in \
+         turn; shown is its median run (the spread of the rounds follows the p99 table).\n",
+        r.scenes.first().and_then(|s| s.variants.first()).map_or(1, |v| v.rounds_mean_tight_us.len())
     );
     let _ = write!(w, "| scene |");
     let variants: Vec<&str> =
@@ -190,6 +192,55 @@ fn table3(w: &mut String, r: &Report) {
                 v.stable
             );
         }
+    }
+    w.push('\n');
+    rounds(w, r);
+}
+
+/// The spread of Table 3 over its rounds: each variant's mean over steps with tight rows in every
+/// round, and `auto`'s speed-up over `full` within each round (the two ran minutes apart at most).
+fn rounds(w: &mut String, r: &Report) {
+    let n = r.scenes.first().and_then(|s| s.variants.first()).map_or(1, |v| v.rounds_mean_tight_us.len());
+    if n < 2 {
+        return;
+    }
+    let _ = writeln!(
+        w,
+        "Rounds: the mean over steps with tight rows (ms) of each of the {n} runs of `full`, `skyline` and \
+         `auto`, least to most, and `auto`'s speed-up over `full` within each round, in round order \
+         (the host's speed drifts between runs; within a round it falls on both):\n"
+    );
+    let _ = writeln!(w, "| scene | full | skyline | auto | auto's speed-up per round | median |");
+    let _ = writeln!(w, "|---|---|---|---|---|---|");
+    let sorted = |v: Option<&super::scenes::VariantRun>| {
+        let mut x = v.map_or(vec![], |v| v.rounds_mean_tight_us.clone());
+        x.sort_by(f64::total_cmp);
+        x.iter().map(|m| format!("{:.3}", m * 1e-3)).collect::<Vec<_>>().join(", ")
+    };
+    for s in &r.scenes {
+        let (full, auto) = (s.variant(Variant::Full), s.variant(Variant::Auto));
+        let mut ratios: Vec<f64> = match (full, auto) {
+            (Some(f), Some(a)) => f
+                .rounds_mean_tight_us
+                .iter()
+                .zip(&a.rounds_mean_tight_us)
+                .filter(|&(_, &a)| a > 0.0)
+                .map(|(f, a)| f / a)
+                .collect(),
+            _ => vec![],
+        };
+        let per_round = ratios.iter().map(|x| format!("{x:.1}×")).collect::<Vec<_>>().join(", ");
+        ratios.sort_by(f64::total_cmp);
+        let median =
+            ratios.get(ratios.len().saturating_sub(1) / 2).map_or("—".into(), |x| format!("{x:.1}×"));
+        let _ = writeln!(
+            w,
+            "| {} | {} | {} | {} | {per_round} | {median} |",
+            s.scene,
+            sorted(full),
+            sorted(s.variant(Variant::Skyline)),
+            sorted(auto)
+        );
     }
     w.push('\n');
 }

@@ -13,6 +13,9 @@ pub struct Plan {
     pub scenes: Vec<&'static str>,
     /// Exact variants of stage 1 (`full` first: the others' speed-up is over it).
     pub variants: Vec<Variant>,
+    /// Rounds of stage 1: each round runs every variant once, in turn, and each variant reports
+    /// its median run (the host's speed drifts between runs; see `scenes.rs`).
+    pub scene_rounds: usize,
     /// Simulated seconds of each scene run (`None`: the scene's own, 20 s).
     pub duration: Option<f64>,
     /// The `auto` run dumps its islands every this many steps.
@@ -54,6 +57,7 @@ impl Plan {
                 mode: "tiny",
                 scenes: vec!["forklift"],
                 variants: vec![Variant::Full, Variant::Auto],
+                scene_rounds: 1,
                 duration: Some(0.25),
                 dump_every: 5,
                 islands: 2,
@@ -78,6 +82,7 @@ impl Plan {
                 mode: "quick",
                 scenes: all_scenes,
                 variants,
+                scene_rounds: 1,
                 duration: Some(4.0),
                 dump_every: 40,
                 islands: 4,
@@ -99,6 +104,7 @@ impl Plan {
             mode: "full",
             scenes: all_scenes,
             variants,
+            scene_rounds: 5,
             duration: None,
             dump_every: 30,
             islands: 12,
@@ -128,8 +134,8 @@ impl Plan {
     /// Units of work for the progress bar: scene runs (with the paired one), island sets, extremes runs, Fig. 4 sizes,
     /// equal-time scenes, rapier runs.
     pub fn units(&self) -> u64 {
-        // Per scene: a run per variant, `auto` cold, and `full` with the paired shadows.
-        let runs = self.scenes.len() * (self.variants.len() + 2);
+        // Per scene: a run per variant and round, `auto` cold, and `full` with the paired shadows.
+        let runs = self.scenes.len() * (self.variants.len() * self.scene_rounds + 2);
         let islands = self.scenes.len();
         let extremes = self.extreme_variants.len() * (self.compliances.len() + self.mass_ratios.len());
         let rapier = if super::rapier::BUILT { 3 * 2 * self.rapier_ratios.len() } else { 0 };
