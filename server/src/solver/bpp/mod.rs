@@ -309,7 +309,10 @@ enum FactorIn {
 }
 
 /// A reusable solver: buffers are sized by the first solve of a given size and reused afterwards
-/// (no heap allocation per solve once warm).
+/// (no heap allocation per solve once warm). The large ones — the permuted copy of `A` and its
+/// pattern, the factor buffers, the per-row iterates — grow to 1.5× what a solve needs, their
+/// memory touched at once (`problem::reserve_touched`), so an island that grows by up to half (a
+/// contact onset) neither reallocates them nor page-faults in the middle of a step.
 #[derive(Debug, Default)]
 pub struct Solver {
     opts: SolverOptions,
