@@ -5,16 +5,16 @@
 //! topic, and the queryables `…/scene` (the encoded description) and `…/control` (requests
 //! answered by the loop thread).
 //!
-//! Events (thresholds raised and cleared, faults, refused faults) are not frames: each is sent once, and a
-//! lost one is lost for good. With *drop*, the events frame — the fourth message of a step's
-//! burst, on the same priority queue as the three frames before it — was the one Zenoh threw
-//! away when its transmit task had not emptied the queue within its drop wait (seen on a loaded
-//! two-core machine: a live fault that never reached the ROS bridge). So events go out on their
-//! own priority ([`EVENTS_PRIORITY`], a queue of their own, empty but for them) with congestion
-//! control *block*, from a thread of their own fed by a bounded channel: the loop hands the
-//! frame over without waiting, a congested link delays events instead of losing them, and only
-//! a channel full of [`EVENTS_BACKLOG`] undelivered frames (a link stuck for that many event
-//! steps) drops one, counted and logged.
+//! Events (thresholds raised and cleared, faults, refused faults) are not frames: each is sent
+//! once, and a lost one is lost for good. With *drop*, the events frame — the fourth message of a
+//! step's burst, on the same priority queue as the three frames before it — was the one Zenoh
+//! threw away when its transmit task had not emptied the queue within its drop wait (seen on a
+//! loaded two-core machine: a live fault that never reached the ROS bridge). So events go out on
+//! their own priority ([`EVENTS_PRIORITY`], a queue of their own, empty but for them) with
+//! congestion control *block*, from a thread of their own fed by a bounded channel: the loop
+//! hands the frame over without waiting, a congested link delays events instead of losing them,
+//! and only a channel full of [`EVENTS_BACKLOG`] undelivered frames (a link stuck for that many
+//! event steps) drops one, counted and logged.
 
 use std::sync::mpsc::{SyncSender, TrySendError, sync_channel};
 use std::sync::{Arc, RwLock};

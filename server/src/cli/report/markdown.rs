@@ -131,7 +131,7 @@ fn table3(w: &mut String, r: &Report) {
          every step, which an operator feels. The paper's `full`, `downdating` and `downdating skyline` \
          (Intel i7-5820K) beside. Each variant ran {} time(s), in rounds that run every variant once in \
          turn; shown is its median run (the spread of the rounds follows the p99 table).\n",
-        r.scenes.first().and_then(|s| s.variants.first()).map_or(1, |v| v.rounds_mean_tight_us.len())
+        rounds_run(r)
     );
     let _ = write!(w, "| scene |");
     let variants: Vec<&str> =
@@ -197,10 +197,15 @@ fn table3(w: &mut String, r: &Report) {
     rounds(w, r);
 }
 
+/// How many rounds stage 1 ran (each variant's run carries every round's mean).
+fn rounds_run(r: &Report) -> usize {
+    r.scenes.first().and_then(|s| s.variants.first()).map_or(1, |v| v.rounds_mean_tight_us.len())
+}
+
 /// The spread of Table 3 over its rounds: each variant's mean over steps with tight rows in every
 /// round, and `auto`'s speed-up over `full` within each round (the two ran minutes apart at most).
 fn rounds(w: &mut String, r: &Report) {
-    let n = r.scenes.first().and_then(|s| s.variants.first()).map_or(1, |v| v.rounds_mean_tight_us.len());
+    let n = rounds_run(r);
     if n < 2 {
         return;
     }
