@@ -88,6 +88,45 @@
 //! arrow (73) and made it 3× slower. The step counts of eight strategies on every corpus file
 //! are in the corpus README.
 //!
+//! **Measured and dropped in the session of 2026-12-03** (release, `auto`; the forklift's four
+//! solves at contact compliance 1e-10 that no setting finishes warm within 1,000 steps, steps
+//! 446/447/451/455, 203 rows; the forwarder's three solves above 35 steps in its exact, cap-1000
+//! trajectory, steps 931/785/786 with 144/42/40 steps; in simulation the eight 20 s runs at the
+//! paper's cap):
+//! - *Friction coupling alone makes the forklift's four hard.* With the friction boxes frozen at
+//!   the solution's normals its warm start converges in 11–13 steps (9 of them the active-set
+//!   safeguard); the plain outer fixed point (`coupled_update` and `newton_fallback` off) needs
+//!   15–46 bound updates of 2–3.5 steps each (41–92 steps), the defaults 1,000+ (148 of 150 coupled
+//!   points damped, semismooth Newton cycling with a period of about 11).
+//! - *Anderson acceleration of the outer fixed point in the normals* (type II, depth 1–5, instead
+//!   of the coupled update): fewer updates (depth 2: 16/9/86/14 against 46/24/26/15) but each
+//!   extrapolated freeze point is farther from the last index set, so more steps per update:
+//!   111/69/789/112 steps at depth 2, 1,000+ on one file at depths 1, 3 and 5.
+//! - *Early crossover from the interior point method* (winch at 1e-10, its 12 hardest solves): the
+//!   exact solve of the index set the iterate identifies (`s < z`), frozen or coupled, keeps a
+//!   residual of 0.2–1.0 while the method's own falls to 1e-6, and 1.7e-4 when it reaches 1e-10:
+//!   many pairs stay `s ≈ z ≈ 0` (degenerate solutions of redundant stiff contacts), so no
+//!   identification before convergence shortens its 13–26 iterations. In simulation `ipm_after`
+//!   0…4 with `newton_first` gave 11, 14, 15, 4, 3 capped solves at 1e-10 (4 is shipped).
+//! - *The safeguard's steps are mostly degenerate* (`safeguard.rs`): on forwarder 931, 64 of 106
+//!   non-final safeguard steps have a ratio-test step of 0 (a free variable already on its bound
+//!   that the face minimiser pushes out: a linear solve that binds it and moves nothing); the
+//!   forklift's `hard03` 91 of 145. Their full projected Newton points truly raise `f` (by
+//!   1e1…1e10; only 2–9 % of them lower it), so an Armijo test computed without cancellation —
+//!   `Δf = ½ sᵀ(w_old + w_new)` from the step `s` instead of two values of `f` — changed no count. Binding every free variable
+//!   on a bound up front (after an outer update, and in the ε-binding set whatever its gradient)
+//!   cut forwarder 931 144 → 72 steps and 786 40 → 22, but in simulation the forwarder went 8 → 50
+//!   capped solves (a cascade from another grasp step), the forklift at 1e-10 9 → 10, the winch at
+//!   1e-10 3 → 8 + 4 inexact; each half alone: forwarder 173 (after updates) / 48 (ε-binding set).
+//! - *The forwarder's log* ends 2.4 cm from the exact run's; the exact runs with `full`, `skyline`
+//!   and `auto` agree to 0.1 mm, so all of it comes from the 8 capped solves (785 and 931–937:
+//!   931 needs 144 steps, the six after it follow from its capped answer). `polish_sweeps` 0 / 100
+//!   gave 6.2 cm (7 capped) / 24 cm (105 capped, a cascade), `exact_bilateral = false` 9.0 cm.
+//! - *A cold start after a capped solve* (the next step of that island without its warm start,
+//!   so the interior point method takes it after 3 steps): forwarder 8 → 177 capped solves, its
+//!   longest 21 ms; forklift at 1e-10 9 → 8, winch at 1e-10 3 → 3. A capped answer is a better
+//!   start than none.
+//!
 //! **Semismooth Newton first** ([`SolverOptions::newton_first`], off by default; scene setting
 //! `newton_first`): a warm-started solve with friction first takes up to `NEWTON_FIRST_BUDGET`
 //! semismooth Newton steps on the true, moving bounds, leaving early when `‖r‖²` does not halve
