@@ -123,14 +123,16 @@
 //!   931 needs 144 steps, the six after it follow from its capped answer). `polish_sweeps` 0 / 100
 //!   gave 6.2 cm (7 capped) / 24 cm (105 capped, a cascade), `exact_bilateral = false` 9.0 cm.
 //! - *A cold start after a capped solve.* The capped answer at 931 makes the next steps' warm
-//!   starts poor: alone, at cap 1000, the forwarder's 932–936 of the capped run need 467 to
-//!   1,000+ steps warm, but 23, 23, 27 and 73 cold (936: 1,000+ either way), where the interior
-//!   point method takes them after 3 steps. In simulation (the next step of an island after a
-//!   capped solve without its warm start) the cold solves converge, at 9–12 ms each (27 steps of
-//!   ~350 µs LU on 222 rows), but the steps after them cap again, every other step from 940 on:
-//!   forwarder 8 → 177 capped solves, longest 21 ms; forklift at 1e-10 9 → 8, winch at 1e-10
-//!   3 → 3. (The interior point solution need not be the one the warm pivoting would reach: with
-//!   friction coupled to the normals the problem can have several.)
+//!   starts poor: alone, at cap 1000, the forwarder's 932–936 of the capped run need 467 to 1,000+
+//!   steps warm, but 23, 23, 27 and 73 cold (936: 1,000+ either way), where the interior point
+//!   method takes them after 3 steps. It is the warm `λ` that decides (it keeps the solve on the
+//!   pivoting path): without it but with the index set the counts are the cold ones (931 itself
+//!   144 → 125), without the index set but with `λ` the warm ones. In simulation (the next step of an
+//!   island after a capped solve without its warm start) the cold solves converge, at 9–12 ms each
+//!   (27 steps of ~350 µs LU on 222 rows), but the steps after them cap again, every other step
+//!   from 940 on: forwarder 8 → 177 capped solves, longest 21 ms; forklift at 1e-10 9 → 8, winch at
+//!   1e-10 3 → 3. (The interior point solution need not be the one the warm pivoting would reach:
+//!   with friction coupled to the normals the problem can have several.)
 //!
 //! **Semismooth Newton first** ([`SolverOptions::newton_first`], off by default; scene setting
 //! `newton_first`): a warm-started solve with friction first takes up to `NEWTON_FIRST_BUDGET`
