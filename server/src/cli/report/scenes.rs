@@ -197,9 +197,10 @@ fn variant_run(v: Variant, s: &RunSummary, steps: Vec<StepPoint>) -> VariantRun 
     all.sort_by(f64::total_cmp);
     let mean = |x: &[f64]| if x.is_empty() { 0.0 } else { x.iter().sum::<f64>() / x.len() as f64 };
     let p99 = all.get(((all.len() as f64 * 0.99) as usize).min(all.len().saturating_sub(1))).copied();
+    let mean_tight_us = mean(&tight);
     VariantRun {
         variant: v.name().to_string(),
-        mean_tight_us: mean(&tight),
+        mean_tight_us,
         mean_us: mean(&all),
         p99_us: p99.unwrap_or(0.0),
         max_us: all.last().copied().unwrap_or(0.0),
@@ -208,7 +209,7 @@ fn variant_run(v: Variant, s: &RunSummary, steps: Vec<StepPoint>) -> VariantRun 
         not_converged: s.solves_max_steps + s.solves_inexact,
         max_joint_error_m: s.max_joint_error_m,
         stable: s.stable && s.finite,
-        rounds_mean_tight_us: vec![mean(&tight)],
+        rounds_mean_tight_us: vec![mean_tight_us],
         steps,
     }
 }
