@@ -89,8 +89,8 @@
 //! are in the corpus README.
 //!
 //! **Measured and dropped in the session of 2026-12-03** (release, `auto`; the forklift's four
-//! solves at contact compliance 1e-10 that no setting finishes warm within 1,000 steps, steps
-//! 446/447/451/455, 203 rows; the forwarder's three solves above 35 steps in its exact, cap-1000
+//! solves at contact compliance 1e-10 that the defaults do not finish warm within 1,000 steps,
+//! steps 446/447/451/455, 203 rows; the forwarder's three solves above 35 steps in its exact, cap-1000
 //! trajectory, steps 931/785/786 with 144/42/40 steps; in simulation the eight 20 s runs at the
 //! paper's cap):
 //! - *Friction coupling alone makes the forklift's four hard.* With the friction boxes frozen at
