@@ -35,3 +35,25 @@ fn second_solve_allocates_nothing() {
         }
     }
 }
+
+/// The direct coupled Newton point (`bpp/coupled.rs`: one envelope LU of the coupled matrix) and
+/// its GMRES fallback allocate nothing once warm either: the winch's sliding chain, warm, where
+/// many friction rows follow their normal impulses.
+#[test]
+fn direct_coupled_points_allocate_nothing_once_warm() {
+    let data = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/data/corpus");
+    let p = pivotsim_server::solver::io::read_mlcp_file(&data.join("winch-hard00-step000585-island0.txt"))
+        .unwrap();
+    for coupled_lu in [Some(true), None, Some(false)] {
+        let opts = SolverOptions { variant: Variant::Auto, max_steps: 100, coupled_lu, ..Default::default() };
+        let mut s = Solver::new(opts);
+        let mut lam = vec![0.0; p.n()];
+        s.solve(&p, &mut lam);
+        let mut points = 0;
+        let second = allocations_during(|| points = s.solve(&p, &mut lam).coupled_lu);
+        assert_eq!(second, 0, "{coupled_lu:?}: {second} allocations in the second solve");
+        if coupled_lu == Some(true) {
+            assert!(points > 0, "the direct coupled point was not exercised");
+        }
+    }
+}

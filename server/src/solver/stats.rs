@@ -99,12 +99,16 @@ pub struct SolveStats {
     pub projected_steps: usize,
     /// Outer friction-bound updates.
     pub friction_updates: usize,
-    /// Outer updates that took the exact coupled Newton point (GMRES preconditioned by the factor).
+    /// Outer updates that took the exact coupled Newton point (`bpp/coupled.rs`).
     pub coupled_steps: usize,
     /// Outer updates where the coupled Newton point was damped or rejected by the residual test.
     pub outer_damped: usize,
-    /// GMRES iterations of those steps.
+    /// GMRES iterations of the coupled Newton points (outer updates and semismooth Newton steps).
     pub krylov_iterations: usize,
+    /// Coupled Newton points solved by one envelope LU of the coupled matrix instead of GMRES.
+    pub coupled_lu: usize,
+    /// Direct coupled points given up (a vanishing pivot, or the residual the LU lost): then GMRES.
+    pub coupled_lu_rejected: usize,
     /// Interior point runs (`bpp/ipm.rs`) in this solve (0 or 1).
     pub ipm_runs: usize,
     /// Interior point iterations (each also counted in `pivot_steps`).

@@ -1,10 +1,46 @@
 //! The exact coupled Newton point of a settled index set: friction rows tight against a free
-//! normal impulse follow it, which makes the linear system non-symmetric; GMRES right-preconditioned
-//! with the factor of `A_FF` at hand solves it in few iterations.
+//! normal impulse follow it, which makes the linear system non-symmetric.
+//!
+//! **Two ways to solve it.** GMRES right-preconditioned with the factor of `A_FF` at hand: the
+//! preconditioned operator is the identity plus a term of rank ≤ #coupled rows, so at most that
+//! many iterations plus one, each a solve with the factor, a product with `A` and an
+//! orthogonalisation. Or directly: one envelope LU (`envelope_lu.rs`, `factor_coupled`) of the
+//! whole square system in which a free row is `A`'s row over the free and coupled columns, a
+//! tight row the identity, and a coupled row `λ_i − μ^± λ_j = 0` — every entry in `A`'s pattern,
+//! since a friction row and its normal touch the same two bodies, so the factors stay in `A`'s
+//! envelope — then a solve and up to [`COUPLED_REFINE`] steps of iterative refinement. Without row
+//! exchanges the LU can lose accuracy where a sliding contact makes its 2×2 block
+//! `[[A_nn, A_nt], [−μ^±, 1]]` nearly singular (determinant `A_nn + μ^± A_nt`), though the whole
+//! system is not: a direct point whose free-row residual misses `GMRES_ACCEPT` is discarded and
+//! GMRES solves from the same start, and the rest of that solve uses GMRES. Which one runs is
+//! [`SolverOptions::coupled_lu`](super::SolverOptions::coupled_lu): by default the cheaper by the
+//! cost model in `coupled_direct` — GMRES at the iterations its recent points took, the LU at
+//! twice the envelope Cholesky's multiply–adds, discounted by the recent share of rejected direct
+//! points — and only with the envelope kernels, whose envelope of `A` it factors on (the dense
+//! kernels of small islands keep GMRES).
+//!
+//! **Measured** (release, `auto`, cap 35, session of 2026-12-03 afternoon). The direct point's
+//! free-row residual on the winch's 12 hardest solves at contact compliance 1e-10 is 5e-15–1e-14
+//! (from 1e-2…9e-1) where GMRES stops at 5e-12–2e-9; with the LU forced, 7 of the 12 points of
+//! the hardest capped one are rejected (6e-5…4e2: the near-singular 2×2 blocks above). Solver time
+//! in-process, each problem solved in turn by a GMRES-only solver and by the default, medians
+//! of 31–81 alternated repeats (a GMRES-only pair of solvers reads 0.995–1.007): the islands
+//! dumped every 7th step of a 20 s run (172 problems each, their simulation warm starts) — winch
+//! 0.82–0.84×, winch at contact compliance 1e-10 0.84–0.87×; every 11th step of the forklift,
+//! vehicle, forwarder and offshore runs 0.997–1.003×; the corpus (the hardest solves, where the
+//! points are few or rejected) 1.001×. (A first cost model that bounded GMRES by `coupled + 1`
+//! iterations chose the LU where GMRES needs 3–7: corpus 1.055×.) The eight 20 s scene runs keep
+//! every capped count and largest residual (the winch at 1e-10 moves its mean pivot steps 6.89 →
+//! 6.90: the exact points round differently). On the corpus (`solver_corpus.rs`), warm and cold
+//! at cap 100, both ways converge on the same 52 of 60 solves and reach the same impulses on all
+//! 22 warm ones. The capped solves, whose longest-solve target this was meant to help, gain
+//! nothing: their points are the rejected ones.
 
 use std::time::Instant;
 
-use super::super::IndexState;
+use super::super::envelope_lu::EnvelopeLu;
+use super::super::problem::reserve_touched;
+use super::super::{IndexState, Variant};
 use super::{FactorIn, Solver, resize, us};
 
 impl Solver {
@@ -13,7 +49,8 @@ impl Solver {
     /// system `(A_FF + A_FT E) λ_F = b_F − A_FT c_T` is not symmetric. Solved by GMRES, right
     /// preconditioned with the factor of `A_FF` already at hand (the preconditioned operator is the
     /// identity plus a term of rank ≤ #coupled rows, so few iterations), starting from the frozen
-    /// point in `λ`. Leaves the corrected `λ` and `w`. Returns `None` when nothing is coupled and
+    /// point in `λ` — or by one envelope LU of the coupled system when that is predicted cheaper
+    /// (module docs). Leaves the corrected `λ` and `w`. Returns `None` when nothing is coupled and
     /// `Some(false)` when GMRES did not reach `GMRES_ACCEPT` (the caller then keeps the frozen point).
     pub(super) fn coupled_newton(&mut self, which: FactorIn) -> Option<bool> {
         let m = self.ap.n();
@@ -30,6 +67,11 @@ impl Solver {
             return None;
         }
         let t0 = Instant::now();
+        if self.coupled_direct(coupled) {
+            self.stats.solve_us += us(t0);
+            return Some(true);
+        }
+        let kry_before = self.stats.krylov_iterations;
         let restart = GMRES_RESTART.min(m);
         resize(&mut self.kry_v, (restart + 1) * m);
         resize(&mut self.kry_h, (restart + 1) * restart);
@@ -64,6 +106,9 @@ impl Solver {
                 break;
             }
         }
+        // What a GMRES point costs, in iterations, for the choice of the next (`coupled_direct`).
+        let used = (self.stats.krylov_iterations - kry_before) as f64;
+        self.cpl.gmres_iters += HISTORY_WEIGHT * (used - self.cpl.gmres_iters);
         // Accept only a converged Newton point: GMRES may stagnate when the coupling is strong.
         let mut beta = 0.0;
         for i in 0..m {
@@ -158,6 +203,116 @@ impl Solver {
         }
     }
 
+    /// The coupled Newton point by one envelope LU of the coupled matrix (`EnvelopeLu::factor_coupled`)
+    /// when that is predicted cheaper than GMRES; `false` (nothing changed but the coupled rows
+    /// following their normals) when GMRES should do it or the LU met a vanishing pivot.
+    fn coupled_direct(&mut self, coupled: usize) -> bool {
+        let m = self.ap.n();
+        // The coupled matrix is factored on the envelope of `A` the envelope kernels keep; the
+        // dense kernels (small islands) leave it to GMRES.
+        if !matches!(
+            self.kernel,
+            Variant::Skyline | Variant::SkylineRefactor | Variant::Incremental | Variant::Auto
+        ) {
+            return false;
+        }
+        let direct = match self.opts.coupled_lu {
+            Some(forced) => forced,
+            // A rejected direct point in this solve: its coupled matrices stay hard for the LU.
+            None if self.stats.coupled_lu_rejected > 0 => false,
+            None => {
+                // GMRES: the iterations its recent points took (at most `coupled + 1`: the
+                // preconditioned operator is the identity plus a term of that rank), each a solve
+                // with the factor at hand, a product with `A` and the orthogonalisation. The LU:
+                // twice the multiply–adds of the envelope Cholesky and two solves, wasted when the
+                // point is rejected (as often as recent attempts were), GMRES then running anyway.
+                let env = &self.env;
+                let iters = self.cpl.gmres_iters.min((coupled + 1) as f64).max(1.0);
+                let per_iter = 2.0 * env.len() as f64 + self.ap.nnz() as f64 + m as f64 * iters;
+                let gmres = iters * per_iter;
+                let lu = 2.0 * env.cost_factor_from(0) + 4.0 * env.len() as f64;
+                lu < (1.0 - self.cpl.lu_rejects) * gmres
+            }
+        };
+        if !direct {
+            return false;
+        }
+        self.apply_coupling();
+        self.compute_w();
+        self.cpl.beta0 = self.free_residual_norm();
+        if self.cpl.beta0 == 0.0 {
+            return true;
+        }
+        let w = &mut self.cpl;
+        w.rows.clear();
+        w.rows.resize(m, None);
+        w.vals.clear();
+        w.vals.resize(m, 0.0);
+        for i in 0..m {
+            if let (true, Some(j)) = (self.tight[i], self.fip[i])
+                && !self.tight[j]
+                && self.lam[j] > 0.0
+            {
+                let coef = if self.state[i] == IndexState::Upper { self.hip[i] } else { self.lop[i] };
+                w.rows[i] = Some(j);
+                w.vals[i] = -coef;
+            }
+        }
+        let t = Instant::now();
+        let factored = w.lu.factor_coupled(&self.env, &self.ap, &self.tight, &w.rows, &w.vals);
+        self.stats.factor_us += us(t);
+        if factored.is_err() {
+            self.stats.coupled_lu_rejected += 1;
+            self.cpl.lu_rejects += HISTORY_WEIGHT * (1.0 - self.cpl.lu_rejects);
+            return false;
+        }
+        self.cpl.start.clear();
+        self.cpl.start.extend_from_slice(&self.lam);
+        // Newton steps on the linear coupled system: one, and refinement while it pays.
+        let mut beta = self.cpl.beta0;
+        for _ in 0..1 + COUPLED_REFINE {
+            for i in 0..m {
+                self.rhs[i] = if self.tight[i] { 0.0 } else { -self.w[i] };
+            }
+            self.cpl.lu.solve(&self.env, &mut self.rhs);
+            for i in 0..m {
+                if !self.tight[i] || self.cpl.rows[i].is_some() {
+                    self.lam[i] += self.rhs[i];
+                }
+            }
+            self.apply_coupling();
+            self.compute_w();
+            let b = self.free_residual_norm();
+            if b <= GMRES_TOL * self.cpl.beta0 || b >= 0.5 * beta {
+                break;
+            }
+            beta = b;
+        }
+        // Without row exchanges the LU can lose the point on an ill-conditioned coupled matrix
+        // (pivots of mixed sign): then GMRES, preconditioned by the Cholesky factor, from the start.
+        if self.free_residual_norm() > GMRES_ACCEPT * self.cpl.beta0 {
+            self.lam.copy_from_slice(&self.cpl.start);
+            self.compute_w();
+            self.stats.coupled_lu_rejected += 1;
+            self.cpl.lu_rejects += HISTORY_WEIGHT * (1.0 - self.cpl.lu_rejects);
+            return false;
+        }
+        self.cpl.lu_rejects -= HISTORY_WEIGHT * self.cpl.lu_rejects;
+        self.stats.coupled_lu += 1;
+        true
+    }
+
+    /// `‖w_F‖₂`, the residual of the free rows.
+    fn free_residual_norm(&self) -> f64 {
+        let mut beta = 0.0;
+        for i in 0..self.ap.n() {
+            if !self.tight[i] {
+                beta += self.w[i] * self.w[i];
+            }
+        }
+        beta.sqrt()
+    }
+
     /// Tight friction rows against a free, positive normal impulse take `μ^± λ_j`.
     pub(super) fn apply_coupling(&mut self) {
         let m = self.ap.n();
@@ -198,6 +353,10 @@ impl Solver {
 }
 
 const GMRES_RESTART: usize = 60;
+/// Refinement steps of a direct coupled Newton point (each one solve with its LU).
+pub(super) const COUPLED_REFINE: usize = 2;
+/// Weight of the newest point in the cost model's averages.
+const HISTORY_WEIGHT: f64 = 0.2;
 const GMRES_CYCLES: usize = 3;
 const GMRES_TOL: f64 = 1e-8;
 /// Largest relative free-row residual of an accepted coupled Newton point.
@@ -205,4 +364,33 @@ const GMRES_ACCEPT: f64 = 1e-6;
 
 fn dot(a: &[f64], b: &[f64]) -> f64 {
     a.iter().zip(b).map(|(x, y)| x * y).sum()
+}
+
+impl CoupledWork {
+    /// Room for the direct points of an `m`-row island with `len` envelope entries: sized when
+    /// the envelope is (`factor.rs`, `prepare`), so that the first direct point of a run, which the
+    /// cost model may choose many steps in, allocates nothing.
+    pub(super) fn reserve(&mut self, m: usize, len: usize) {
+        self.lu.reserve(len, m);
+        reserve_touched(&mut self.rows, m, None);
+        reserve_touched(&mut self.vals, m, 0.0);
+        reserve_touched(&mut self.start, m, 0.0);
+    }
+}
+
+/// Scratch of the direct coupled Newton point, sized by the island and reused.
+#[derive(Debug, Default)]
+pub(super) struct CoupledWork {
+    lu: EnvelopeLu,
+    /// Coupled tight rows: their normal impulse's index and `−μ^±`.
+    rows: Vec<Option<usize>>,
+    vals: Vec<f64>,
+    /// Free-row residual before the Newton point.
+    beta0: f64,
+    /// `λ` before the direct point (restored when it is rejected).
+    start: Vec<f64>,
+    /// Recent GMRES iterations per coupled point, and the recent share of rejected direct points
+    /// (exponential averages over this solver's solves; the cost model's memory).
+    gmres_iters: f64,
+    lu_rejects: f64,
 }

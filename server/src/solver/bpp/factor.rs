@@ -41,6 +41,9 @@ impl Solver {
                 let len = self.env.len();
                 self.stats.factor_entries = len;
                 size_to(&mut self.l, len);
+                if self.fip.iter().any(Option::is_some) {
+                    self.cpl.reserve(m, len);
+                }
                 self.l0_valid = false;
                 self.refactor_spent = 0.0;
                 if matches!(variant, Variant::Skyline | Variant::Auto) {

@@ -169,7 +169,8 @@
 //! bounds that change at every step cycles (measured on `tests/data/scene-shaped`). We freeze the
 //! bounds at the current normal impulses and solve that boxed LCP exactly; then, with the settled
 //! index set, take the exact coupled Newton point in which tight friction rows follow their free
-//! normal impulse (`coupled.rs`: GMRES preconditioned by the factor at hand), update the bounds
+//! normal impulse (`coupled.rs`: GMRES preconditioned by the factor at hand, or one envelope LU of
+//! the coupled matrix where that is cheaper — the winch's solves −16…−18 %), update the bounds
 //! from it and continue from the same index set. This is Newton's method on the outer fixed point
 //! `λ_n ↦ λ_n(bounds(λ_n))`; it needed 1–12 outer updates on every test problem where the plain
 //! fixed point (ODE/Bullet style) stalled. The factor of `A` is computed once and reused by every
@@ -270,6 +271,12 @@ pub struct SolverOptions {
     /// Outer friction updates take the exact coupled Newton point of the settled index set (GMRES
     /// preconditioned by the factor) instead of the plain fixed-point update.
     pub coupled_update: bool,
+    /// How the exact coupled Newton point is solved (`coupled.rs`): `Some(true)` by one envelope LU
+    /// of the coupled matrix, `Some(false)` by GMRES preconditioned with the factor at hand, `None`
+    /// (default) by whichever the cost model predicts cheaper. The LU needs an envelope kernel (the
+    /// dense kernels of small islands always use GMRES), and a direct point whose residual the LU
+    /// (no row exchanges) lost is redone by GMRES either way.
+    pub coupled_lu: Option<bool>,
     /// A capped solve returns its last exact frozen-bounds solution when it has one, rather than
     /// the candidate of smallest residual (module docs, "Safe when capped").
     pub prefer_frozen: bool,
@@ -319,6 +326,7 @@ impl Default for SolverOptions {
             pgs: PgsOptions::default(),
             fallback: Fallback::ProjectedNewton,
             coupled_update: true,
+            coupled_lu: None,
             proximal: true,
             newton_fallback: true,
             auto_weights: (2.15, 0.11, 1.0),
@@ -468,6 +476,8 @@ pub struct Solver {
     /// The index set and `λ` the interior point method started from or converged to (`ipm.rs`).
     ipm_state: Vec<IndexState>,
     ipm_lam: Vec<f64>,
+    /// Scratch of the direct coupled Newton point (`coupled.rs`).
+    cpl: coupled::CoupledWork,
 }
 
 impl Solver {
