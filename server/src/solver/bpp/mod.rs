@@ -135,6 +135,31 @@
 //!   with friction coupled to the normals the problem can have several.) Carrying the last
 //!   converged step's warm start past a capped solve instead of its answer: forwarder 8 → 31
 //!   capped (log 2.7 cm off), forklift at 1e-10 9 → 10, winch at 1e-10 3 → 3.
+//! - *What happens at forwarder 931* (its solution against its warm start, the exact trajectory):
+//!   the grapple's motor row goes from free (−34 N m s) to its relief bound (166.7 = 10 kN m × h),
+//!   three unloaded teeth take load, seven start to slide (four on both friction rows, their
+//!   normals 53 → 40, 31, 22, 13 N s; three on one, 63 → 54, 48, 42); 35 of 84 friction rows and
+//!   3 of 42 normals change state. In the capped run the six solves after it (932–937) never finish a first frozen
+//!   problem within 35 steps (no bound update) and return their warm start — the answer before —
+//!   as the candidate of smallest residual: the cascade is that answer handed on.
+//! - *Releasing fewer at a face minimiser* (`safeguard.rs`; only the `k` bound variables of largest
+//!   predicted decrease `w_i² / A_ii`, `k` = 1, 2, 4, 8, or those within 0.01–0.5 of the largest):
+//!   forwarder 931 144 → 140–182 steps, 785/786 40–53; no file of the cascade or of the
+//!   forklift's four converged within 1,000 either way. The one-at-a-time re-binding after each
+//!   release (tight counts +1 per step for 4–10 steps, then −15…−30) is not caused by releasing
+//!   too many at once.
+//! - *Stiffness as a lever* (forwarder at the paper's cap): contact compliance 1e-9 → 94 capped
+//!   solves, 1e-8 → 1 (shipped 1e-10: 8): not monotone. Compliance on the motor rows (a hydraulic
+//!   stiffness) 1e-9 / 1e-8 → 318 / 364 capped; 1e-7 / 1e-6 → none, but the log stays on the
+//!   ground: a velocity row's compliance is a damper, so the servo's holding force then needs a
+//!   speed error. A hydraulic stiffness would need a position-level spring, not this.
+//! - *The interior point switch on the forwarder's warm solves* (`ipm_after` = 8, 10, 12, 15, 20,
+//!   25, 30): capped solves 21, 4, 17, 28, 28, 56, 348; the log within 1.4, 1.0, 1.6, 1.8, 1.9,
+//!   3.5 mm and 4.0 cm of the exact run's; mean solve 2.5, 0.57, 1.7, 1.8, 0.51, 0.37, 1.9 ms.
+//!   Its capped iterates serve the log better than the frozen ones (mm, not cm, with more capped
+//!   solves), but once a solve has switched the next ones keep switching (`ipm_after` = 10: 74
+//!   solves above 10 steps, 626 of 717 ms of solve time, steps 873–884, 901–925 and 931–945 at
+//!   20–35 steps each): an interior solution is a poor warm start for the pivoting.
 //!
 //! **Semismooth Newton first** ([`SolverOptions::newton_first`], off by default; scene setting
 //! `newton_first`): a warm-started solve with friction first takes up to `NEWTON_FIRST_BUDGET`
