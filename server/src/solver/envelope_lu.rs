@@ -240,20 +240,18 @@ mod tests {
     use super::*;
     use nalgebra::DMatrix;
 
-    /// A random banded SPD matrix with a coupling entry per row inside the band: the envelope LU
-    /// solve agrees with a dense LU of the same matrix.
-    #[test]
-    fn envelope_lu_matches_dense_lu() {
-        let m = 40;
-        let mut state = 12345u64;
+    /// A random symmetric matrix of bandwidth `band − 1` with diagonal `diag ± ½` (row-major
+    /// dense copy, CSR, envelope); off-diagonal entries in `±½`.
+    fn banded(m: usize, band: usize, diag: f64, seed: u64) -> (Vec<f64>, SymCsr, Envelope) {
+        let mut state = seed;
         let mut rnd = || {
             state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
             ((state >> 11) as f64 / (1u64 << 53) as f64) - 0.5
         };
         let mut dense = vec![0.0; m * m];
         for i in 0..m {
-            for j in i..(i + 4).min(m) {
-                let v = if i == j { 4.0 + rnd() } else { rnd() };
+            for j in i..(i + band).min(m) {
+                let v = if i == j { diag + rnd() } else { rnd() };
                 dense[i * m + j] = v;
                 dense[j * m + i] = v;
             }
@@ -261,6 +259,15 @@ mod tests {
         let a = SymCsr::from_dense_row_major(m, &dense).unwrap();
         let mut env = Envelope::new();
         env.build(&a);
+        (dense, a, env)
+    }
+
+    /// A random banded SPD matrix with a coupling entry per row inside the band: the envelope LU
+    /// solve agrees with a dense LU of the same matrix.
+    #[test]
+    fn envelope_lu_matches_dense_lu() {
+        let m = 40;
+        let (dense, a, env) = banded(m, 4, 4.0, 12345);
         let d: Vec<f64> = (0..m).map(|i| 0.5 + (i % 3) as f64).collect();
         let cpl: Vec<Option<usize>> = (0..m)
             .map(|i| {
@@ -301,22 +308,7 @@ mod tests {
     #[test]
     fn coupled_factor_matches_a_dense_lu_of_its_definition() {
         let m = 36;
-        let mut state = 777u64;
-        let mut rnd = || {
-            state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-            ((state >> 11) as f64 / (1u64 << 53) as f64) - 0.5
-        };
-        let mut dense = vec![0.0; m * m];
-        for i in 0..m {
-            for j in i..(i + 5).min(m) {
-                let v = if i == j { 3.0 + rnd() } else { rnd() };
-                dense[i * m + j] = v;
-                dense[j * m + i] = v;
-            }
-        }
-        let a = SymCsr::from_dense_row_major(m, &dense).unwrap();
-        let mut env = Envelope::new();
-        env.build(&a);
+        let (dense, a, env) = banded(m, 5, 3.0, 777);
         // Rows 3k: "normals", free; 3k+1, 3k+2: "friction", tight; every other contact coupled.
         let mut tight = vec![false; m];
         let mut cpl = vec![None; m];
