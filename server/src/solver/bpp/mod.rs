@@ -162,6 +162,20 @@
 //!   solves), but once a solve has switched the next ones keep switching (`ipm_after` = 10: 74
 //!   solves above 10 steps, 626 of 717 ms of solve time, steps 873–884, 901–925 and 931–945 at
 //!   20–35 steps each): an interior solution is a poor warm start for the pivoting.
+//! - *A convex friction model, prototyped* (Anitescu's relaxation, the route proposed to the
+//!   steering team): each contact's pyramid `|λ_t1|, |λ_t2| ≤ μ λ_n` written as the cone of its four
+//!   generators `e_n ± μ e_t1 ± μ e_t2`, `λ_c = E β`, `β ≥ 0`, and the box LCP in `β` with `EᵀAE`
+//!   solved by this solver (no friction index left: fixed bounds, a strictly convex QP once `EᵀAE`
+//!   is made definite). Warm starts mapped to `β` by the product split `β_{±±} = (λ_n ± a)(λ_n ±
+//!   b) / 4λ_n`, `a, b` the friction impulses over `μ`. With only the null direction
+//!   `(1, −1, −1, 1)` of each contact penalised (the exact convex model) the forwarder's eleven hard
+//!   files need 12–67 steps warm (six above 35) and the forklift's four 9–45; with a generator
+//!   compliance `ε I` of 1e-9 of the largest diagonal (about the contacts' own `c/h²`) 5–29 and
+//!   14–35, but the corpus at contact compliance 1e-10 still 18–68 (winch) and 14–48 (forklift).
+//!   And its known artefact is large at `μ = 1`: a sliding contact opens at `μ |v_t|`, measured on
+//!   these files as normal velocities of 0.01–0.75 m/s (forwarder), 0.15–0.5 m/s (forklift, up to
+//!   4.1 m/s on a skidding wheel) and 0.1–0.3 m/s (winch chain), i.e. 2–70 mm of lift per step at
+//!   h = 1/60. Neither faster within the paper's cap nor acceptable physics: route dropped.
 //!
 //! **Semismooth Newton first** ([`SolverOptions::newton_first`], off by default; scene setting
 //! `newton_first`): a warm-started solve with friction first takes up to `NEWTON_FIRST_BUDGET`
