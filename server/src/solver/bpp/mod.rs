@@ -169,13 +169,13 @@
 //!   is made definite). Warm starts mapped to `β` by the product split `β_{±±} = (λ_n ± a)(λ_n ±
 //!   b) / 4λ_n`, `a, b` the friction impulses over `μ`. With only the null direction
 //!   `(1, −1, −1, 1)` of each contact penalised (the exact convex model) the forwarder's eleven hard
-//!   files need 12–67 steps warm (six above 35) and the forklift's four 9–45; with a generator
+//!   files need 12–67 steps warm (eight above 35) and the forklift's four 9–45; with a generator
 //!   compliance `ε I` of 1e-9 of the largest diagonal (about the contacts' own `c/h²`) 5–29 and
 //!   14–35, but the corpus at contact compliance 1e-10 still 18–68 (winch) and 14–48 (forklift).
 //!   And its known artefact is large at `μ = 1`: a sliding contact opens at `μ |v_t|`, measured on
-//!   these files as normal velocities of 0.01–0.75 m/s (forwarder), 0.15–0.5 m/s (forklift, up to
-//!   4.1 m/s on a skidding wheel) and 0.1–0.3 m/s (winch chain), i.e. 2–70 mm of lift per step at
-//!   h = 1/60. Neither faster within the paper's cap nor acceptable physics: route dropped.
+//!   these files as normal velocities up to 0.75 m/s (forwarder), 0.15–0.5 m/s on the forklift
+//!   (4.1 m/s on one contact) and 0.08–0.3 m/s on the winch's chain: 1–12 mm of lift per step at
+//!   h = 1/60 (68 mm at the worst). Neither within the paper's cap nor acceptable physics: dropped.
 //!
 //! **Semismooth Newton first** ([`SolverOptions::newton_first`], off by default; scene setting
 //! `newton_first`): a warm-started solve with friction first takes up to `NEWTON_FIRST_BUDGET`
