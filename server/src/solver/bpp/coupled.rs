@@ -34,7 +34,11 @@
 //! 6.90: the exact points round differently). On the corpus (`solver_corpus.rs`), warm and cold
 //! at cap 100, both ways converge on the same 52 of 60 solves and reach the same impulses on all
 //! 22 warm ones. The capped solves, whose longest-solve target this was meant to help, gain
-//! nothing: their points are the rejected ones.
+//! nothing: their points are the rejected ones. Nor does GMRES preconditioned by a rejected
+//! point's LU rescue them: its Arnoldi estimate falls to 1e-13 after one vector while the true
+//! residual stays at 0.1–4e2 (the LU's answer carries a huge component along a near-null
+//! direction, which the product with the coupled matrix cancels in rounding) — measured on the
+//! winch's three capped files at 1e-10, and dropped.
 
 use std::time::Instant;
 
