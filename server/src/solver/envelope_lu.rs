@@ -123,10 +123,6 @@ impl EnvelopeLu {
                     self.lo[at] += v;
                 }
             }
-            if tight[j] && self.scale[j] == 0.0 {
-                self.up[env.index(j, j)] = 1.0;
-                self.scale[j] = 1.0;
-            }
         }
         self.add_couplings(env, cpl, cv)?;
         self.eliminate(env)

@@ -58,15 +58,7 @@ impl Solver {
     /// `Some(false)` when GMRES did not reach `GMRES_ACCEPT` (the caller then keeps the frozen point).
     pub(super) fn coupled_newton(&mut self, which: FactorIn) -> Option<bool> {
         let m = self.ap.n();
-        let mut coupled = 0;
-        for i in 0..m {
-            if let (true, Some(j)) = (self.tight[i], self.fip[i])
-                && !self.tight[j]
-                && self.lam[j] > 0.0
-            {
-                coupled += 1;
-            }
-        }
+        let coupled = (0..m).filter(|&i| self.coupled_row(i).is_some()).count();
         if coupled == 0 {
             return None;
         }
@@ -114,14 +106,9 @@ impl Solver {
         let used = (self.stats.krylov_iterations - kry_before) as f64;
         self.cpl.gmres_iters += HISTORY_WEIGHT * (used - self.cpl.gmres_iters);
         // Accept only a converged Newton point: GMRES may stagnate when the coupling is strong.
-        let mut beta = 0.0;
-        for i in 0..m {
-            if !self.tight[i] {
-                beta += self.w[i] * self.w[i];
-            }
-        }
+        let beta = self.free_residual_norm();
         self.stats.solve_us += us(t0);
-        Some(beta.sqrt() <= GMRES_ACCEPT * beta0.max(f64::MIN_POSITIVE))
+        Some(beta <= GMRES_ACCEPT * beta0.max(f64::MIN_POSITIVE))
     }
 
     /// One GMRES cycle's Arnoldi process from `v₀` (normalised, `g = β e₁` set): `z = P⁻¹ v_k`,
@@ -243,37 +230,29 @@ impl Solver {
         }
         self.apply_coupling();
         self.compute_w();
-        self.cpl.beta0 = self.free_residual_norm();
-        if self.cpl.beta0 == 0.0 {
+        let beta0 = self.free_residual_norm();
+        if beta0 == 0.0 {
             return true;
         }
-        let w = &mut self.cpl;
-        w.rows.clear();
-        w.rows.resize(m, None);
-        w.vals.clear();
-        w.vals.resize(m, 0.0);
+        self.cpl.rows.clear();
+        self.cpl.vals.clear();
         for i in 0..m {
-            if let (true, Some(j)) = (self.tight[i], self.fip[i])
-                && !self.tight[j]
-                && self.lam[j] > 0.0
-            {
-                let coef = if self.state[i] == IndexState::Upper { self.hip[i] } else { self.lop[i] };
-                w.rows[i] = Some(j);
-                w.vals[i] = -coef;
-            }
+            let row = self.coupled_row(i);
+            self.cpl.rows.push(row.map(|(j, _)| j));
+            self.cpl.vals.push(row.map_or(0.0, |(_, coef)| -coef));
         }
         let t = Instant::now();
+        let w = &mut self.cpl;
         let factored = w.lu.factor_coupled(&self.env, &self.ap, &self.tight, &w.rows, &w.vals);
         self.stats.factor_us += us(t);
         if factored.is_err() {
-            self.stats.coupled_lu_rejected += 1;
-            self.cpl.lu_rejects += HISTORY_WEIGHT * (1.0 - self.cpl.lu_rejects);
+            self.reject_direct();
             return false;
         }
         self.cpl.start.clear();
         self.cpl.start.extend_from_slice(&self.lam);
         // Newton steps on the linear coupled system: one, and refinement while it pays.
-        let mut beta = self.cpl.beta0;
+        let mut beta = beta0;
         for _ in 0..1 + COUPLED_REFINE {
             for i in 0..m {
                 self.rhs[i] = if self.tight[i] { 0.0 } else { -self.w[i] };
@@ -287,23 +266,43 @@ impl Solver {
             self.apply_coupling();
             self.compute_w();
             let b = self.free_residual_norm();
-            if b <= GMRES_TOL * self.cpl.beta0 || b >= 0.5 * beta {
+            let stop = b <= GMRES_TOL * beta0 || b >= 0.5 * beta;
+            beta = b;
+            if stop {
                 break;
             }
-            beta = b;
         }
         // Without row exchanges the LU can lose the point on an ill-conditioned coupled matrix
         // (pivots of mixed sign): then GMRES, preconditioned by the Cholesky factor, from the start.
-        if self.free_residual_norm() > GMRES_ACCEPT * self.cpl.beta0 {
+        if beta > GMRES_ACCEPT * beta0 {
             self.lam.copy_from_slice(&self.cpl.start);
             self.compute_w();
-            self.stats.coupled_lu_rejected += 1;
-            self.cpl.lu_rejects += HISTORY_WEIGHT * (1.0 - self.cpl.lu_rejects);
+            self.reject_direct();
             return false;
         }
         self.cpl.lu_rejects -= HISTORY_WEIGHT * self.cpl.lu_rejects;
         self.stats.coupled_lu += 1;
         true
+    }
+
+    /// A direct point given up: counted, and remembered by the cost model.
+    fn reject_direct(&mut self) {
+        self.stats.coupled_lu_rejected += 1;
+        self.cpl.lu_rejects += HISTORY_WEIGHT * (1.0 - self.cpl.lu_rejects);
+    }
+
+    /// Tight friction row `i` against a free, positive normal impulse (a *coupled* row): that
+    /// normal's index and the bound factor `μ^±` its value follows.
+    fn coupled_row(&self, i: usize) -> Option<(usize, f64)> {
+        match (self.tight[i], self.fip[i]) {
+            (true, Some(j)) if !self.tight[j] && self.lam[j] > 0.0 => Some((j, self.friction_coef(i))),
+            _ => None,
+        }
+    }
+
+    /// The factor `μ^±` of the bound tight friction row `i` sits on.
+    fn friction_coef(&self, i: usize) -> f64 {
+        if self.state[i] == IndexState::Upper { self.hip[i] } else { self.lop[i] }
     }
 
     /// `‖w_F‖₂`, the residual of the free rows.
@@ -324,8 +323,7 @@ impl Solver {
             if let (true, Some(j)) = (self.tight[i], self.fip[i])
                 && !self.tight[j]
             {
-                let coef = if self.state[i] == IndexState::Upper { self.hip[i] } else { self.lop[i] };
-                self.lam[i] = coef * self.lam[j].max(0.0);
+                self.lam[i] = self.friction_coef(i) * self.lam[j].max(0.0);
             }
         }
     }
@@ -339,11 +337,7 @@ impl Solver {
             }
         }
         for i in 0..m {
-            if let (true, Some(j)) = (self.tight[i], self.fip[i])
-                && !self.tight[j]
-                && self.lam[j] > 0.0
-            {
-                let coef = if self.state[i] == IndexState::Upper { self.hip[i] } else { self.lop[i] };
+            if let Some((j, coef)) = self.coupled_row(i) {
                 self.kry_z[i] = coef * self.kry_z[j];
             }
         }
@@ -389,8 +383,6 @@ pub(super) struct CoupledWork {
     /// Coupled tight rows: their normal impulse's index and `−μ^±`.
     rows: Vec<Option<usize>>,
     vals: Vec<f64>,
-    /// Free-row residual before the Newton point.
-    beta0: f64,
     /// `λ` before the direct point (restored when it is rejected).
     start: Vec<f64>,
     /// Recent GMRES iterations per coupled point, and the recent share of rejected direct points
