@@ -18,7 +18,7 @@
 //! names and applies from the next step. `load_scene` takes a scene name or path (1 ..= 256 bytes,
 //! no control characters) and starts it paused at time 0. The reply's `ok` carries the state after
 //! the request; `error` carries a code (`invalid_request`, `unknown_variant`, `unknown_scene`,
-//! `scene_load_failed`, `busy`, `fault_rejected`, `internal`) and a message of at most 1024 bytes.
+//! `scene_load_failed`, `load_refused`, `busy`, `fault_rejected`, `internal`) and a message of at most 1024 bytes.
 //! `fault` injects a fault (`break`, `hose_burst`, `brake_fade`, `stick_valve`, `dropout`) on a
 //! named joint, actuator or sensor; the scene checks the target (`fault_rejected` if it refuses).
 
@@ -189,6 +189,9 @@ pub enum ControlErrorCode {
     UnknownScene,
     /// The scene exists but did not load.
     SceneLoadFailed,
+    /// `load_scene` refused before reading: a path outside the server's scene directories, a file
+    /// that is not a regular file (FIFO, device, directory), or one above the server's size bound.
+    LoadRefused,
     /// The server cannot do it now (e.g. `step` while running).
     Busy,
     /// A `fault` the scene refused: an unknown target, a target of the wrong kind, a value out of
