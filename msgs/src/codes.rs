@@ -5,7 +5,7 @@
 //! | [`SolverVariant`] | 0 `full`, 1 `downdate`, 2 `skyline`, 3 `skyline-refactor`, 4 `incremental`, 5 `auto`, 6 `pgs` |
 //! | [`SolveStatus`] | 0 `converged`, 1 `inexact`, 2 `max-steps`, 3 `empty`, 4 `non-finite`, 5 `budget` |
 //! | [`ActuatorMode`] | 0 `velocity`, 1 `position`, 2 `effort` |
-//! | [`RejectReason`] | 0 `malformed`, 1 `version`, 2 `non-finite`, 3 `out-of-range`, 4 `unknown-actuator`, 5 `oversize`, 6 `stale`, 7 `other` |
+//! | [`RejectReason`] | 0 `malformed`, 1 `version`, 2 `non-finite`, 3 `out-of-range`, 4 `unknown-actuator`, 5 `oversize`, 6 `stale`, 7 `other`, 8 `wrong-mode` |
 //!
 //! The solver variant codes are the indices of [`SOLVER_VARIANTS`](crate::SOLVER_VARIANTS); a test pins the two together.
 

@@ -3,10 +3,10 @@
 //! ```text
 //! offset size field
 //!      0    4 magic            b"PVSM"
-//!      4    2 version          u16 LE, FORMAT_VERSION (2)
+//!      4    2 version          u16 LE, FORMAT_VERSION (4)
 //!      6    2 kind             u16 LE, Kind code
 //!      8    4 payload_len      u32 LE, bytes after the header
-//!     12    4 flags            u32 LE, reserved: 0 in version 1
+//!     12    4 flags            u32 LE, reserved: 0 in this version
 //!     16    … payload          payload_len bytes
 //! ```
 //!
@@ -20,7 +20,7 @@ use crate::le;
 /// First four bytes of every frame.
 pub const MAGIC: [u8; 4] = *b"PVSM";
 /// Version written by this crate and the only one it decodes.
-pub const FORMAT_VERSION: u16 = 3;
+pub const FORMAT_VERSION: u16 = 4;
 /// Bytes of the header.
 pub const HEADER_LEN: usize = 16;
 /// Largest frame of any kind, header included (16 MiB).
@@ -76,7 +76,7 @@ impl Kind {
         self as u16
     }
 
-    /// The kind of a header code, if version 1 knows it.
+    /// The kind of a header code, if this version knows it.
     pub fn from_code(code: u16) -> Option<Kind> {
         Kind::ALL.into_iter().find(|k| k.code() == code)
     }
@@ -171,7 +171,7 @@ pub enum FrameError {
         /// Version field.
         found: u16,
     },
-    /// A kind code version 1 does not define.
+    /// A kind code this version does not define.
     #[error("unknown message kind 0x{found:04x}")]
     UnknownKind {
         /// Kind field.
@@ -192,7 +192,7 @@ pub enum FrameError {
         found: Kind,
     },
     /// Reserved flag bits set.
-    #[error("reserved header flags 0x{found:08x} set (must be 0 in version 1)")]
+    #[error("reserved header flags 0x{found:08x} set (must be 0 in version {FORMAT_VERSION})")]
     Flags {
         /// Flags field.
         found: u32,
@@ -371,8 +371,8 @@ mod tests {
         b[0] = b'X';
         assert!(matches!(peek(&b), Err(FrameError::BadMagic { .. })));
         let mut b = ok.clone();
-        b[4] = 2;
-        assert_eq!(peek(&b), Err(FrameError::UnsupportedVersion { found: 2 }));
+        b[4] = 3;
+        assert_eq!(peek(&b), Err(FrameError::UnsupportedVersion { found: 3 }));
         let mut b = ok.clone();
         b[6] = 0x77;
         assert_eq!(peek(&b), Err(FrameError::UnknownKind { found: 0x77 }));
