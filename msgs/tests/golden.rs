@@ -53,6 +53,25 @@ fn golden_pose_frame() {
 }
 
 #[test]
+fn golden_stats_frame() {
+    let want = hex_dump("<!-- golden:stats -->");
+    let mut got = Vec::new();
+    sample_stats().encode(&mut got).unwrap();
+    assert_eq!(got, want, "encoded:\n{}", dump(&got));
+    assert_eq!(want.len(), 232);
+    assert_eq!(SolverStats::decode(&want).unwrap(), sample_stats());
+    // Every field of the fixed part is non-trivial (no counter or flag left at 0), so that the
+    // example pins each one's offset.
+    let s = sample_stats();
+    assert!(s.inputs.rejected.iter().all(|&n| n > 0), "{:?}", s.inputs.rejected);
+    assert!(s.overruns > 0 && s.inputs.accepted > 0 && s.inputs.deadman_trips > 0 && s.unstable_steps > 0);
+    assert!(s.inputs.deadman_active && s.unstable && s.islands[0].fallback);
+    let d = s.degraded;
+    assert!(d.capped > 0 && d.inexact > 0 && d.budget > 0 && d.fallback > 0);
+    assert_eq!(s.totals, StepTotals::from_islands(&s.islands));
+}
+
+#[test]
 fn golden_winch_command() {
     let want = hex_dump("<!-- golden:winch -->");
     let cmd = InputCommand::Winch(WinchCommand {
@@ -82,6 +101,31 @@ fn golden_signals_and_events() {
     assert_eq!(EventsFrame::decode(&want).unwrap(), sample_events());
 }
 
+/// The signals example follows the page's own contact convention: the normal points from A to B
+/// and the record's forces are those on B. Body 5 (A) rests on the ground (B, body 0) at z = 0, so
+/// the normal points down into the ground, the ground is pushed down and body 5 up.
+#[test]
+fn golden_signals_contact_follows_the_normal_convention() {
+    let s = sample_signals();
+    let c = &s.contacts[0];
+    assert_eq!((c.body_a, c.body_b), (5, 0));
+    let dot = |a: [f64; 3], b: [f64; 3]| a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+    assert_eq!(dot(c.normal, c.normal), 1.0, "a unit normal");
+    // From A (above) to B (below): down. The normal force on B is normal_force · normal.
+    assert!(c.normal[2] < 0.0, "the normal points from body 5 down into the ground");
+    let on_ground = c.normal.map(|n| c.normal_force * n);
+    let on_body = on_ground.map(|f| -f);
+    assert!(on_ground[2] < 0.0 && on_body[2] > 0.0, "the ground is pushed down, body 5 up");
+    // Friction on B is tangential, of length friction_force; slipping, at its bound μ λ_n.
+    assert_eq!(dot(c.friction, c.normal), 0.0);
+    assert_eq!(dot(c.friction, c.friction).sqrt(), c.friction_force);
+    assert_eq!(c.state, ContactCode::Slip);
+    assert!(c.friction_force <= c.normal_force);
+    // The README's bytes say the same.
+    let want = hex_dump("<!-- golden:signals -->");
+    assert_eq!(SignalsFrame::decode(&want).unwrap().contacts[0].normal, [0.0, 0.0, -1.0]);
+}
+
 fn json_frame(kind: Kind, json: &str) -> Vec<u8> {
     let mut b = Vec::new();
     b.extend_from_slice(&MAGIC);
@@ -96,7 +140,7 @@ fn json_frame(kind: Kind, json: &str) -> Vec<u8> {
 #[test]
 fn readme_control_examples_decode_and_encode_identically() {
     let requests = block_after("<!-- example:control-request -->");
-    assert_eq!(requests.len(), 8);
+    assert_eq!(requests.len(), 9);
     let mut buf = Vec::new();
     for line in requests {
         let r = ControlRequest::decode(&json_frame(Kind::ControlRequest, line))
@@ -204,4 +248,45 @@ fn readme_sizes_match_the_constants() {
     assert_eq!(HEADER_LEN + JOYSTICK_LEN, 168);
     assert_eq!(HEADER_LEN + WINCH_LEN, 72);
     assert_eq!(HEADER_LEN + ACTUATOR_LEN, 72);
+}
+
+/// Each reply example answers a request example with the same id, and its code is one that
+/// request's op can get (a `load_refused` or `unknown_scene` answers a `load_scene`, …).
+#[test]
+fn readme_reply_examples_answer_their_requests() {
+    let requests: Vec<ControlRequest> = block_after("<!-- example:control-request -->")
+        .into_iter()
+        .map(|l| ControlRequest::decode(&json_frame(Kind::ControlRequest, l)).unwrap())
+        .collect();
+    let replies = block_after("<!-- example:control-reply -->");
+    assert!(replies.len() >= 3);
+    let mut codes = Vec::new();
+    for line in replies {
+        let reply = ControlReply::decode(&json_frame(Kind::ControlReply, line)).unwrap();
+        let req = requests
+            .iter()
+            .find(|r| r.id == reply.id)
+            .unwrap_or_else(|| panic!("{line}: no request example has id {}", reply.id));
+        let op = serde_json::to_value(&req.command).unwrap()["op"].as_str().unwrap().to_string();
+        match &reply.outcome {
+            ControlOutcome::Ok(status) => {
+                if let ControlCommand::SetVariant { variant } = req.command {
+                    assert_eq!(status.variant, variant, "{line}");
+                }
+            }
+            ControlOutcome::Error(f) => {
+                use ControlErrorCode as C;
+                let ops: &[&str] = match f.code {
+                    C::UnknownScene | C::SceneLoadFailed | C::LoadRefused => &["load_scene", "reset"],
+                    C::UnknownVariant => &["set_variant"],
+                    C::FaultRejected => &["fault"],
+                    C::Busy => &["step"],
+                    C::InvalidRequest | C::Internal => &[],
+                };
+                assert!(ops.is_empty() || ops.contains(&op.as_str()), "{line} answers a `{op}` request");
+                codes.push(f.code);
+            }
+        }
+    }
+    assert!(codes.contains(&ControlErrorCode::LoadRefused), "the example shows load_refused");
 }

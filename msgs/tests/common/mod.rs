@@ -217,7 +217,9 @@ pub fn control_reply() -> impl Strategy<Value = ControlReply> {
         ControlErrorCode::UnknownVariant,
         ControlErrorCode::UnknownScene,
         ControlErrorCode::SceneLoadFailed,
+        ControlErrorCode::LoadRefused,
         ControlErrorCode::Busy,
+        ControlErrorCode::FaultRejected,
         ControlErrorCode::Internal,
     ];
     let outcome = prop_oneof![
@@ -630,7 +632,10 @@ pub fn sample_signals() -> SignalsFrame {
             point: [1.0, -0.5, 0.0],
             normal_force: 400.0,
             friction_force: 200.0,
-            normal: [0.0, 0.0, 1.0],
+            // From A (body 5) to B (the ground): down. The force on the ground, 400 N along it,
+            // pushes the ground down; body 5 slides towards -x, so the friction on the ground is
+            // along -x and on body 5 along +x.
+            normal: [0.0, 0.0, -1.0],
             friction: [-200.0, 0.0, 0.0],
         }],
     }
@@ -649,5 +654,38 @@ pub fn sample_events() -> EventsFrame {
             value: 1997.0,
             level: 1962.0,
         }],
+    }
+}
+
+/// The golden stats frame of the README: one island, every fixed field non-trivial.
+pub fn sample_stats() -> SolverStats {
+    let island = IslandStats {
+        variant: SolverVariant::Skyline,
+        status: SolveStatus::Inexact,
+        fallback: true,
+        rows: 24,
+        bodies: 3,
+        pivot_steps: 17,
+        tight: 10,
+        iterations: 0,
+        solve_us: 312.25,
+        residual_rel: 0.0009765625,
+    };
+    SolverStats {
+        sequence: 420,
+        sim_time: 7.0,
+        step_wall_us: 850.5,
+        overruns: 2,
+        totals: StepTotals::from_islands(&[island]),
+        inputs: InputHealth {
+            accepted: 1200,
+            rejected: [3, 1, 2, 2, 4, 1, 5, 1, 1],
+            deadman_trips: 1,
+            deadman_active: true,
+        },
+        islands: vec![island],
+        unstable: true,
+        unstable_steps: 2,
+        degraded: DegradedSolves { capped: 3, inexact: 2, budget: 1, fallback: 4 },
     }
 }
