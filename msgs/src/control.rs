@@ -15,10 +15,13 @@
 //!
 //! `id` is chosen by the client and echoed by the reply. `step` advances a paused world by `count`
 //! steps (1 ..= 3600) and leaves it paused. `set_variant` takes one of the seven solver variant
-//! names and applies from the next step. `load_scene` takes a scene name or path (1 ..= 256 bytes,
-//! no control characters) and starts it paused at time 0. The reply's `ok` carries the state after
-//! the request; `error` carries a code (`invalid_request`, `unknown_variant`, `unknown_scene`,
-//! `scene_load_failed`, `load_refused`, `busy`, `fault_rejected`, `internal`) and a message of at most 1024 bytes.
+//! names and applies from the next step. `load_scene` takes a built-in scene name or a path inside
+//! the server's scene directories (1 ..= 256 bytes, no control characters) and starts it paused at
+//! time 0, its first frames with a new sequence (last + 1). An `id` that is not a u64 (−1, 2^64)
+//! makes the request undecodable: it is answered `invalid_request` with id 0. The reply's `ok`
+//! carries the state after the request; `error` carries a code (`invalid_request`,
+//! `unknown_variant`, `unknown_scene`, `scene_load_failed`, `load_refused`, `busy`,
+//! `fault_rejected`, `internal`) and a message of at most 1024 bytes.
 //! `fault` injects a fault (`break`, `hose_burst`, `brake_fade`, `stick_valve`, `dropout`) on a
 //! named joint, actuator or sensor; the scene checks the target (`fault_rejected` if it refuses).
 

@@ -2,7 +2,9 @@
 //!
 //! All four are small binary frames. Every one starts with `sequence` (u64, increasing per source)
 //! and `source_id` (u32, chosen by the sender: the server keeps the latest input per source and
-//! drops older sequences as stale).
+//! drops older or equal sequences as stale — one counter per `source_id`, across the four kinds).
+//! [`InputCommand::decode`] checks in the order `msgs/README.md` gives ("Order of the input
+//! checks"): header, input kind, fixed part, then by kind; a boom's `count` before its layout.
 //!
 //! ```text
 //! joystick (0x0010), payload 152 bytes
