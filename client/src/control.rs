@@ -37,7 +37,8 @@ pub enum Op {
         /// Variant name.
         name: String,
     },
-    /// Load a scene (built-in name or a path the server can read), paused at time 0.
+    /// Load a scene, paused at time 0: a built-in name, or a file in one of the server's scene
+    /// directories (`serve --scene-dir`; anything else is refused as `load_refused`).
     Load {
         /// Scene name or path.
         scene: String,

@@ -74,6 +74,10 @@ pub struct Common {
     /// Zenoh endpoint to listen on (repeatable; none by default: the client only connects).
     #[arg(long, global = true, value_name = "ENDPOINT")]
     pub listen: Vec<String>,
+    /// A Zenoh configuration file (JSON5): credentials for a server with access control
+    /// (`deploy/zenoh/`), routers; `--connect`/`--listen` are added to it.
+    #[arg(long, global = true, value_name = "FILE")]
+    pub zenoh_config: Option<std::path::PathBuf>,
     /// Seconds to wait for the server: connecting, replies, and (for watch, ping, record, send)
     /// the longest silence before giving up. Default 5 s for one-shot commands and ping; watch and
     /// record wait for frames indefinitely unless given.
@@ -89,7 +93,11 @@ impl Common {
 
     /// Zenoh endpoints.
     pub fn zenoh(&self) -> net::ZenohOptions {
-        net::ZenohOptions { connect: self.connect.clone(), listen: self.listen.clone() }
+        net::ZenohOptions {
+            connect: self.connect.clone(),
+            listen: self.listen.clone(),
+            config_file: self.zenoh_config.clone(),
+        }
     }
 
     /// The `--timeout`, or `default`.

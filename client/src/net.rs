@@ -38,6 +38,8 @@ pub struct ZenohOptions {
     pub connect: Vec<String>,
     /// Endpoints to listen on (none by default).
     pub listen: Vec<String>,
+    /// A Zenoh configuration file (credentials, routers); the endpoints are added to it.
+    pub config_file: Option<std::path::PathBuf>,
 }
 
 /// A frame as received.
@@ -66,10 +68,15 @@ pub fn zenoh_config(opts: &ZenohOptions) -> Result<zenoh::Config> {
     let e = pivotsim_link::zenoh_config::ZenohEndpoints {
         listen: opts.listen.clone(),
         connect: opts.connect.clone(),
+        config_file: opts.config_file.clone(),
         ..Default::default()
     };
     Ok(e.config()?)
 }
+
+/// How long the server's token must be visible while control requests end without a reply before
+/// the client calls them refused (declarations may take a moment to reach a new session).
+pub const REFUSED_AFTER: Duration = Duration::from_millis(500);
 
 /// A Zenoh session connected to the server.
 pub struct ZenohLink {
@@ -224,11 +231,49 @@ impl ZenohLink {
     ///
     /// A request is sent again only while no queryable answered at all (the server never saw it),
     /// so a `step` is never applied twice.
+    ///
+    /// A server with access control (README, "Who may steer the world") finishes a query it
+    /// refuses at once with no reply. When the server's liveliness token
+    /// (`pivotsim/<world>/server`) stays visible for [`REFUSED_AFTER`] while every request ends
+    /// without a reply, the request is reported as refused instead of retried until the timeout.
     pub fn control(&self, req: &msgs::ControlRequest, timeout: Duration) -> Result<msgs::ControlReply> {
         let mut buf = Vec::new();
         req.encode(&mut buf).context("control request")?;
-        let bytes = self.query_retrying(&self.world.key(Topic::Control), Some(buf), timeout)?;
-        msgs::ControlReply::decode(&bytes).context("the control reply does not decode")
+        let key = self.world.key(Topic::Control);
+        let deadline = Instant::now() + timeout;
+        let mut alive_since: Option<Instant> = None;
+        loop {
+            let left = deadline.saturating_duration_since(Instant::now()).max(Duration::from_millis(50));
+            if let Some(bytes) = self.query(&key, Some(buf.clone()), left)? {
+                return msgs::ControlReply::decode(&bytes).context("the control reply does not decode");
+            }
+            if self.server_alive(Duration::from_millis(200)) {
+                let since = *alive_since.get_or_insert_with(Instant::now);
+                if since.elapsed() >= REFUSED_AFTER {
+                    bail!(
+                        "refused: the server of world `{}` is up but does not answer control requests \
+                         from this session: its access control refuses them for these credentials \
+                         (--zenoh-config)",
+                        self.world
+                    );
+                }
+            } else {
+                alive_since = None;
+            }
+            if Instant::now() >= deadline || crate::interrupted() {
+                bail!("zenoh: nothing answers {key} (no server for world `{}`?)", self.world);
+            }
+            std::thread::sleep(Duration::from_millis(20));
+        }
+    }
+
+    /// Whether the server's liveliness token of this world answers within `timeout`.
+    pub fn server_alive(&self, timeout: Duration) -> bool {
+        let Ok(replies) = self.session.liveliness().get(self.world.server_token()).timeout(timeout).wait()
+        else {
+            return false;
+        };
+        matches!(replies.recv_timeout(timeout + Duration::from_millis(50)), Ok(Some(r)) if r.result().is_ok())
     }
 }
 

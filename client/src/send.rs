@@ -3,7 +3,7 @@
 //! ```text
 //! send winch ACTUATOR SPEED                               drum speed (rad/s, + hauls in)
 //! send actuator NAME VALUE [--mode velocity|position|effort]
-//! send boom NAME=V [NAME=V …]                             velocity targets
+//! send boom NAME=V [NAME=V …]                             targets in each actuator's mode
 //! send joystick --axes a,b,c [--buttons BITS]
 //! ```
 //!

@@ -27,7 +27,7 @@
 //!    0  8  sequence      u64
 //!    8  4  source_id     u32
 //!   12  4  count         u32, ≤ 16 (0 is a keep-alive that sets nothing)
-//!   16 40  entry × count: name field (32) + f64 velocity target (m/s or rad/s); names unique
+//!   16 40  entry × count: name field (32) + f64 target in the actuator's mode; names unique
 //!
 //! actuator (0x0013), payload 56 bytes
 //!    0  8  sequence      u64
@@ -113,16 +113,17 @@ pub struct WinchCommand {
     pub drum_speed: f64,
 }
 
-/// One named velocity target of a boom command.
+/// One named target of a boom command, read in its actuator's mode.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct BoomTarget {
     /// Actuator name.
     pub actuator: ActuatorName,
-    /// Velocity target (m/s or rad/s).
+    /// Target in the actuator's mode: a velocity (m/s, rad/s) or a position (m, rad).
     pub value: f64,
 }
 
-/// Velocity targets for the boom functions (slew, lift, stick, telescope, …), one lever each.
+/// Targets for the boom functions (slew, lift, stick, telescope, …), one lever each, each read
+/// in its actuator's mode (velocity or position).
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct BoomCommand {
     /// Increasing per source.

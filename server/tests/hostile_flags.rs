@@ -26,6 +26,10 @@ fn hostile_values_of_every_numeric_flag_never_panic() {
         cases.push(vec!["solve", &problem, "--tol", v]);
         cases.push([&serve[..], &["--steps", "2", "--fast", "--max-solve-us", v]].concat());
     }
+    // Scene directories that are none: missing, a file, a device, empty.
+    for dir in ["/no/such/scene/dir", "/etc/hostname", "/dev/null", ""] {
+        cases.push([&serve[..], &["--steps", "2", "--fast", "--scene-dir", dir]].concat());
+    }
     // Scene overrides: a value the scene refuses, a key that names nothing, no `=`.
     for set in
         ["max_solve_us=-1", "max_solve_us=nan", "max_pivot_steps=0", "body.nobody.mass=1", "timestep", "="]
@@ -36,6 +40,7 @@ fn hostile_values_of_every_numeric_flag_never_panic() {
     for v in HOSTILE_INTS {
         cases.push([&serve[..], &["--steps", "2", "--fast", "--deadman-ms", v]].concat());
         cases.push([&serve[..], &["--fast", "--steps", v]].concat());
+        cases.push([&serve[..], &["--steps", "2", "--fast", "--max-scene-bytes", v]].concat());
         for flag in ["--every", "--dump-hard"] {
             let dump = ["--dump-mlcp", "/nonexistent", flag, v];
             cases.push(

@@ -80,7 +80,9 @@ fn winch_boom_and_actuator_commands_move_the_right_joints_in_wire_units() {
     assert!(e.tick(t0));
     assert!((joint_speed(&e, "axle") - 1.5).abs() < 1e-6, "drum at the commanded 1.5 rad/s");
     assert!(joint_speed(&e, "rail").abs() < 1e-6, "the slider did not move");
-    // A boom command is a velocity target: the position actuator's target moves at 0.6 m/s.
+    // A boom command is read in each actuator's mode (msgs/README.md): on the position actuator
+    // 0.6 is a position target of 0.6 m, reached at the actuator's 10 m/s and held — not a
+    // speed (which would have moved the slider 0.6 m/s × 30 h = 0.3 m).
     let boom = frame(msgs::InputCommand::Boom(msgs::BoomCommand {
         sequence: 2,
         source_id: 7,
@@ -92,7 +94,8 @@ fn winch_boom_and_actuator_commands_move_the_right_joints_in_wire_units() {
         e.tick(t0);
     }
     let s = joint_coordinate(&e, "rail");
-    assert!((s - 0.6 * 30.0 * h).abs() < 1e-6, "slider at {s}");
+    assert!((s - 0.6).abs() < 1e-6, "slider at {s}, not at the 0.6 m target");
+    assert!((0.6 * 30.0 * h - 0.6).abs() > 0.1, "the test tells a position from a speed");
     // An actuator command in position mode sets the target.
     let pos = frame(msgs::InputCommand::Actuator(msgs::ActuatorCommand {
         sequence: 3,
@@ -102,8 +105,8 @@ fn winch_boom_and_actuator_commands_move_the_right_joints_in_wire_units() {
         value: -0.25,
     }));
     e.handle_input(Some(msgs::Topic::Actuator), &pos, t0).unwrap();
-    // At most 10 m/s (max_speed): 0.55 m takes 4 steps.
-    for _ in 0..5 {
+    // At most 10 m/s (max_speed): 0.85 m takes 6 steps.
+    for _ in 0..7 {
         e.tick(t0);
     }
     assert!((joint_coordinate(&e, "rail") + 0.25).abs() < 1e-6);
@@ -260,14 +263,26 @@ fn control_requests_pause_step_reset_load_and_fail_with_typed_errors() {
     assert_eq!(msgs::PoseFrameView::parse(e.pose_frame()).unwrap().sequence(), 13);
     let O::Ok(s) = control(&mut e, 4, C::Reset) else { panic!() };
     assert!(s.paused && s.sim_time == 0.0 && s.scene == "pendulum");
+    // The reset state is a new state: a new sequence, never a repeat of step 13's.
+    assert_eq!(s.sequence, 14);
+    assert_eq!(msgs::PoseFrameView::parse(e.pose_frame()).unwrap().sequence(), 14);
     let O::Ok(s) = control(&mut e, 5, C::LoadScene { scene: "box_stack".into() }) else { panic!() };
     assert_eq!(s.scene, "box_stack");
+    assert_eq!(s.sequence, 15);
     assert_eq!(msgs::SceneDescription::decode(e.description()).unwrap().scene, "box_stack");
     match control(&mut e, 6, C::LoadScene { scene: "no-such-scene".into() }) {
         O::Error(f) => assert_eq!(f.code, msgs::ControlErrorCode::UnknownScene),
         o => panic!("{o:?}"),
     }
     let bad = temp_file("serve-engine-bad.toml", "[scene]\nname = 3\n");
+    // A file outside the scene directories is refused before it is read; inside, it is loaded
+    // and its mistakes are located.
+    match control(&mut e, 7, C::LoadScene { scene: bad.display().to_string() }) {
+        O::Error(f) => assert_eq!(f.code, msgs::ControlErrorCode::LoadRefused, "{}", f.message),
+        o => panic!("{o:?}"),
+    }
+    let dir = bad.parent().unwrap().to_path_buf();
+    e.set_load_policy(pivotsim_server::serve::loader::LoadPolicy::new(&[dir], 1 << 20).unwrap());
     match control(&mut e, 7, C::LoadScene { scene: bad.display().to_string() }) {
         O::Error(f) => {
             assert_eq!(f.code, msgs::ControlErrorCode::SceneLoadFailed);
@@ -493,4 +508,35 @@ fn the_description_gives_the_frame_a_joint_sensor_reports_in() {
     assert!(tw.norm() <= 1e-6 * w, "torque about the anchor {tw}");
     assert!((ch("pin_t/tension") - w).abs() <= 1e-6 * w);
     assert!((ch("support/fz") - 10.0 * 9.81).abs() <= 1e-6 * 98.1);
+}
+
+/// A refused fault's target is published as an event record whatever its length or spelling
+/// (`msgs/README.md`, events): characters outside the name rules become `_`, a target of more than
+/// 32 characters keeps 30 and ends in `..`; `events_total` never counts a record the frame lacks.
+#[test]
+fn refused_fault_targets_of_any_length_or_spelling_give_one_record_each() {
+    use msgs::ControlCommand as C;
+    let mut e = engine(&rig_path());
+    control(&mut e, 1, C::Pause);
+    let long = "a-joint-name-that-is-much-longer-than-32-bytes";
+    let cases = [("no such joint", "no_such_joint".to_string()), (long, format!("{}..", &long[..30]))];
+    for (k, (target, want)) in cases.iter().enumerate() {
+        let fault = C::Fault {
+            fault: msgs::FaultKind::Break,
+            target: target.to_string(),
+            tension: None,
+            to: None,
+            ramp: None,
+        };
+        match control(&mut e, 10 + k as u64, fault) {
+            msgs::ControlOutcome::Error(f) => assert_eq!(f.code, msgs::ControlErrorCode::FaultRejected),
+            o => panic!("{o:?}"),
+        }
+        control(&mut e, 20 + k as u64, C::Step { count: 1 });
+        let ev = msgs::EventsFrame::decode(e.events_frame()).expect("an events frame");
+        assert_eq!(ev.events.len(), 1, "one record for `{target}`");
+        assert_eq!(ev.events_total, k as u64 + 1);
+        assert_eq!(ev.events[0].kind, msgs::EventCode::FaultRejected);
+        assert_eq!(ev.events[0].name.as_str(), want);
+    }
 }

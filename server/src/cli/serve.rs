@@ -71,6 +71,14 @@ pub struct ServeArgs {
     /// the stats), so no step overruns because of the solver (default: the scene's `max_solve_us`).
     #[arg(long, value_parser = values::positive_finite, allow_negative_numbers = true)]
     pub max_solve_us: Option<f64>,
+    /// A directory whose scene files `load_scene` may read (repeatable; default: none, so peers
+    /// can load built-in scenes only). Paths outside it, links leading out of it, FIFOs, devices
+    /// and directories are refused (`load_refused`).
+    #[arg(long = "scene-dir", value_name = "DIR")]
+    pub scene_dirs: Vec<PathBuf>,
+    /// Largest scene file `load_scene` or `reset` reads, in bytes (at least 1).
+    #[arg(long, default_value_t = pivotsim_server::serve::loader::DEFAULT_MAX_SCENE_BYTES, value_parser = clap::value_parser!(u64).range(1..))]
+    pub max_scene_bytes: u64,
 }
 
 impl ServeArgs {
@@ -98,6 +106,9 @@ impl ServeArgs {
             start_paused: self.paused,
             overrides: self.set,
             max_solve_us: self.max_solve_us,
+            scene_dirs: self.scene_dirs,
+            max_scene_bytes: self.max_scene_bytes,
+            slow_load: None,
         }
     }
 }

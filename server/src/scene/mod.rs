@@ -238,6 +238,14 @@ pub fn load_str(file: &str, text: &str) -> Result<Scene, SceneError> {
     build::build(file, text)
 }
 
+/// Loads a scene from text with settings overridden (`--set KEY=VALUE`, see [`SceneOverride`]);
+/// `file` labels error locations.
+pub fn load_str_with(file: &str, text: &str, overrides: &[SceneOverride]) -> Result<Scene, SceneError> {
+    let text = overrides::apply(text, overrides)
+        .map_err(|source| SceneError::Override { file: file.to_string(), source })?;
+    load_str(file, &text)
+}
+
 /// Loads a scene file.
 pub fn load_file(path: &Path) -> Result<Scene, SceneError> {
     let file = path.display().to_string();
@@ -255,11 +263,7 @@ pub fn load(name_or_path: &str) -> Result<Scene, SceneError> {
 /// (`--set KEY=VALUE`, see [`SceneOverride`]); the overridden values pass the same checks as
 /// values written in the file.
 pub fn load_with(name_or_path: &str, overrides: &[SceneOverride]) -> Result<Scene, SceneError> {
-    let with = |file: String, text: &str| {
-        let text = overrides::apply(text, overrides)
-            .map_err(|source| SceneError::Override { file: file.clone(), source })?;
-        load_str(&file, &text)
-    };
+    let with = |file: String, text: &str| load_str_with(&file, text, overrides);
     if let Some(b) = builtin(name_or_path) {
         return with(format!("builtin:{}", b.name), b.text);
     }

@@ -7,15 +7,24 @@
 //! version, kind on its key), its sequence must be newer than the last accepted one of its source
 //! (else *stale*), and every actuator it names must exist with the right kind; a rejected input is
 //! counted by reason in the stats and changes nothing. Wire values are in physical units and
-//! converted to actuator values (`describe.rs`): a winch or velocity command sets a speed, a boom
-//! command on a position actuator moves its target at the given rate, an actuator command sets
-//! its value in its own mode, a joystick goes through the scene's mapping.
+//! converted to actuator values (`describe.rs`): a winch command sets a drum speed, a boom command
+//! sets each target in its actuator's own mode (a speed for a velocity actuator, a position for a
+//! position actuator), an actuator command sets its value in its own mode, a joystick goes through
+//! the scene's mapping (a `rate` binding moves its actuator's value at `scale · axis` per second).
 //!
 //! **Script and deadman.** Until the first accepted input the scene's scripted timeline drives the
 //! actuators. From then on the operator does, and if no input is accepted for the deadman timeout
 //! every actuator goes to its neutral (velocity motors hold, position motors hold where they are,
-//! brakes on, clutches open), the boom rates stop, and the stats say so until the next input.
+//! brakes on, clutches open), and the stats say so until the next input.
 //! `reset` and `load_scene` hand control back to the script.
+//!
+//! **Loading.** `load_scene` and `reset` read and build their scene as a [`LoadJob`] under the
+//! engine's [`LoadPolicy`] (`loader.rs`: built-in names, the start scene, files inside the scene
+//! directories, regular and size-bounded). [`Engine::begin_control`] hands such a job back instead
+//! of running it, so that the server's loop runs it on its loader thread and calls
+//! [`Engine::finish_load`] at a step boundary; [`Engine::handle_control`] does both in turn (tests,
+//! tools). The new scene's first frames carry a new `sequence` (the last one plus one): a repeated
+//! sequence always means a repeat of the same state.
 
 use std::collections::HashMap;
 use std::time::{Duration, Instant};
@@ -23,7 +32,10 @@ use std::time::{Duration, Instant};
 use pivotsim_msgs as msgs;
 use tracing::{info, warn};
 
+use std::sync::Arc;
+
 use super::describe::{actuator_mode, describe};
+use super::loader::{LoadError, LoadJob, LoadPolicy, Loaded};
 use crate::dynamics::{BodyKind, Watchdog};
 use crate::scene::{self, ActuatorKind, Scene, SceneError};
 use crate::solver::Variant;
@@ -46,7 +58,6 @@ pub struct Engine {
     manual: bool,
     last_input: Option<Instant>,
     deadman: Duration,
-    rates: Vec<f64>,
     axes: [f64; msgs::MAX_AXES],
     buttons: [bool; msgs::MAX_BUTTONS],
     pose_buf: Vec<u8>,
@@ -75,6 +86,17 @@ pub struct Engine {
     start_scene: String,
     /// Server-wide solve time budget (`serve --max-solve-us`), applied to every scene loaded.
     max_solve_us: Option<f64>,
+    /// What `load_scene` and `reset` may read.
+    policy: Arc<LoadPolicy>,
+}
+
+/// What a control request asks of the loop ([`Engine::begin_control`]).
+#[derive(Debug)]
+pub enum ControlStep {
+    /// Done: the encoded reply.
+    Reply(Vec<u8>),
+    /// A scene to load (`load_scene`, `reset`): run it, then [`Engine::finish_load`].
+    Load(LoadJob),
 }
 
 impl Engine {
@@ -115,7 +137,6 @@ impl Engine {
             manual: false,
             last_input: None,
             deadman,
-            rates: Vec::new(),
             axes: [0.0; msgs::MAX_AXES],
             buttons: [false; msgs::MAX_BUTTONS],
             pose_buf: Vec::new(),
@@ -137,18 +158,25 @@ impl Engine {
             overrides: Vec::new(),
             start_scene: String::new(),
             max_solve_us: None,
+            policy: Arc::new(LoadPolicy::default()),
         };
         e.overrides = overrides.to_vec();
         e.start_scene = scene_ref.to_string();
         e.max_solve_us = max_solve_us;
+        e.set_load_policy(LoadPolicy::default());
         e.scene_changed();
         e.encode_frames(0);
         Ok(e)
     }
 
+    /// Sets what `load_scene` and `reset` may read (the start scene stays loadable).
+    pub fn set_load_policy(&mut self, mut policy: LoadPolicy) {
+        policy.trust_start_scene(&self.start_scene);
+        self.policy = Arc::new(policy);
+    }
+
     fn scene_changed(&mut self) {
         self.generation += 1;
-        self.rates = vec![0.0; self.scene.controls.actuators().len()];
         let d = describe(&self.scene, self.world_name.as_str());
         self.description.clear();
         if let Err(e) = d.encode(&mut self.description) {
@@ -203,8 +231,8 @@ impl Engine {
     }
 
     /// The frames of the last step, as the transports publish them.
-    pub fn frames(&self) -> super::Frames<'_> {
-        super::Frames {
+    pub fn frames(&self) -> super::transport::Frames<'_> {
+        super::transport::Frames {
             poses: &self.pose_buf,
             stats: &self.stats_buf,
             signals: &self.signals_buf,
@@ -307,8 +335,7 @@ impl Engine {
         let unknown = msgs::RejectReason::UnknownActuator;
         let controls = &self.scene.controls;
         // Check everything first, then apply: an input is all or nothing.
-        let mut sets: [(usize, f64, bool); msgs::MAX_BOOM_TARGETS] =
-            [(0, 0.0, false); msgs::MAX_BOOM_TARGETS];
+        let mut sets: [(usize, f64); msgs::MAX_BOOM_TARGETS] = [(0, 0.0); msgs::MAX_BOOM_TARGETS];
         let mut n = 0;
         match cmd {
             msgs::InputCommand::Joystick(j) => {
@@ -330,7 +357,7 @@ impl Engine {
                 if !controls.actuators()[i].is_winch() {
                     return Err(unknown);
                 }
-                sets[0] = (i, w.drum_speed / controls.actuators()[i].unit_scale(), false);
+                sets[0] = (i, w.drum_speed / controls.actuators()[i].unit_scale());
                 n = 1;
             }
             msgs::InputCommand::Boom(b) => {
@@ -338,11 +365,11 @@ impl Engine {
                     let i = self.actuator(t.actuator.as_str())?;
                     let a = &controls.actuators()[i];
                     let v = t.value / a.unit_scale();
-                    sets[n] = match a.kind() {
-                        ActuatorKind::Velocity => (i, v, false),
-                        ActuatorKind::Position => (i, v, true),
-                        _ => return Err(unknown),
-                    };
+                    if !matches!(a.kind(), ActuatorKind::Velocity | ActuatorKind::Position) {
+                        return Err(unknown);
+                    }
+                    // Read in the actuator's own mode: a speed, or a position target.
+                    sets[n] = (i, v);
                     n += 1;
                 }
             }
@@ -359,42 +386,73 @@ impl Engine {
                     ActuatorKind::Brake | ActuatorKind::Clutch => 0.0,
                     _ => c.value / a.unit_scale(),
                 };
-                sets[0] = (i, v, false);
+                sets[0] = (i, v);
                 n = 1;
             }
         }
         if sets[..n].iter().any(|s| !s.1.is_finite()) {
             return Err(msgs::RejectReason::NonFinite);
         }
-        for &(i, v, rate) in &sets[..n] {
-            if rate {
-                self.rates[i] = v;
-            } else {
-                self.rates[i] = 0.0;
-                self.scene.controls.set_index(i, v).map_err(|_| msgs::RejectReason::NonFinite)?;
-            }
+        for &(i, v) in &sets[..n] {
+            self.scene.controls.set_index(i, v).map_err(|_| msgs::RejectReason::NonFinite)?;
         }
         Ok(())
     }
 
-    /// Decodes a control request, carries it out and returns the encoded reply.
+    /// Decodes a control request, carries it out and returns the encoded reply; a `load_scene` or
+    /// `reset` is read and built on the calling thread ([`Engine::begin_control`] splits it).
     pub fn handle_control(&mut self, bytes: &[u8]) -> Vec<u8> {
+        match self.begin_control(bytes) {
+            ControlStep::Reply(r) => r,
+            ControlStep::Load(job) => self.finish_load(job.run()),
+        }
+    }
+
+    /// Decodes a control request and carries it out, except a `load_scene` or `reset`, whose
+    /// [`LoadJob`] it returns for the caller to run (on any thread) and hand to
+    /// [`Engine::finish_load`].
+    pub fn begin_control(&mut self, bytes: &[u8]) -> ControlStep {
         let reply = match msgs::ControlRequest::decode(bytes) {
             Err(e) => msgs::ControlRequest::rejection(bytes, &e),
-            Ok(req) => match self.control(&req.command) {
-                Ok(()) => msgs::ControlReply::ok(req.id, self.status()),
-                Err((code, msg)) => msgs::ControlReply::error(req.id, code, msg),
-            },
+            Ok(req) => {
+                let scene_ref = match &req.command {
+                    msgs::ControlCommand::Reset => Some(self.scene_ref.clone()),
+                    msgs::ControlCommand::LoadScene { scene } => Some(scene.clone()),
+                    _ => None,
+                };
+                if let Some(scene_ref) = scene_ref {
+                    let overrides =
+                        if scene_ref == self.start_scene { self.overrides.clone() } else { Vec::new() };
+                    return ControlStep::Load(LoadJob::new(
+                        req.id,
+                        &scene_ref,
+                        self.policy.clone(),
+                        overrides,
+                    ));
+                }
+                match self.control(&req.command) {
+                    Ok(()) => msgs::ControlReply::ok(req.id, self.status()),
+                    Err((code, msg)) => msgs::ControlReply::error(req.id, code, msg),
+                }
+            }
         };
-        let mut buf = Vec::new();
-        if let Err(e) = reply.encode(&mut buf) {
-            // A message too long for the wire: say so briefly instead.
-            let r =
-                msgs::ControlReply::error(reply.id, msgs::ControlErrorCode::Internal, format!("reply: {e}"));
-            buf.clear();
-            let _ = r.encode(&mut buf);
-        }
-        buf
+        ControlStep::Reply(encode_reply(&reply))
+    }
+
+    /// The encoded error reply to request `id` (`busy`: a load while another is under way).
+    pub fn error_reply(id: u64, code: msgs::ControlErrorCode, why: &str) -> Vec<u8> {
+        encode_reply(&msgs::ControlReply::error(id, code, why))
+    }
+
+    /// Installs a finished load (at a step boundary) and returns the encoded reply to its request:
+    /// the new scene paused at time 0 with a new sequence, or the failure with the running scene
+    /// kept.
+    pub fn finish_load(&mut self, loaded: Loaded) -> Vec<u8> {
+        let reply = match self.install(loaded.result, &loaded.scene_ref) {
+            Ok(()) => msgs::ControlReply::ok(loaded.id, self.status()),
+            Err((code, msg)) => msgs::ControlReply::error(loaded.id, code, msg),
+        };
+        encode_reply(&reply)
     }
 
     fn control(&mut self, cmd: &msgs::ControlCommand) -> Result<(), (msgs::ControlErrorCode, String)> {
@@ -423,9 +481,9 @@ impl Engine {
                 }
                 self.encode_frames(pivotsim_link::wall_ns());
             }
-            C::Reset => {
-                let scene_ref = self.scene_ref.clone();
-                self.load(&scene_ref)?;
+            // Loads go through `begin_control`'s jobs.
+            C::Reset | C::LoadScene { .. } => {
+                return Err((E::Internal, "a load is not a direct control request".into()));
             }
             C::SetVariant { variant } => {
                 let v = Variant::from(*variant);
@@ -434,7 +492,6 @@ impl Engine {
                 self.scene.world.set_settings(s).map_err(|e| (E::Internal, e.to_string()))?;
                 info!("solver variant switched to {}", v.name());
             }
-            C::LoadScene { scene } => self.load(scene)?,
             C::Fault { fault, target, tension, to, ramp } => {
                 let req = scene::FaultRequest {
                     kind: fault.name().to_string(),
@@ -450,15 +507,14 @@ impl Engine {
         Ok(())
     }
 
-    fn load(&mut self, scene_ref: &str) -> Result<(), (msgs::ControlErrorCode, String)> {
-        let variant = self.scene.world.settings().solver.variant;
-        let overrides: &[scene::SceneOverride] =
-            if scene_ref == self.start_scene { &self.overrides } else { &[] };
-        let mut sc = scene::load_with(scene_ref, overrides).map_err(|e| match e {
-            SceneError::Unknown { .. } => (msgs::ControlErrorCode::UnknownScene, e.to_string()),
-            _ => (msgs::ControlErrorCode::SceneLoadFailed, e.to_string()),
-        })?;
+    fn install(
+        &mut self,
+        result: Result<Scene, LoadError>,
+        scene_ref: &str,
+    ) -> Result<(), (msgs::ControlErrorCode, String)> {
+        let mut sc = result.map_err(|e| (e.code(), e.to_string()))?;
         // The live variant and the server's budget carry over to the new scene.
+        let variant = self.scene.world.settings().solver.variant;
         let mut s = *sc.world.settings();
         s.solver.variant = variant;
         s.solver.max_solve_us = self.max_solve_us.or(s.solver.max_solve_us);
@@ -468,6 +524,8 @@ impl Engine {
         self.scene_ref = scene_ref.to_string();
         self.paused = true;
         self.scene_changed();
+        // A new state gets a new sequence: the previous one's frames stay its own.
+        self.sequence += 1;
         self.encode_frames(pivotsim_link::wall_ns());
         Ok(())
     }
@@ -479,7 +537,6 @@ impl Engine {
             let silent = self.last_input.is_none_or(|t| now.saturating_duration_since(t) > self.deadman);
             if silent {
                 self.scene.controls.neutralize(&self.scene.world);
-                self.rates.iter_mut().for_each(|r| *r = 0.0);
                 self.health.deadman_active = true;
                 self.health.deadman_trips = self.health.deadman_trips.saturating_add(1);
                 info!("deadman: no input for {:?}, actuators at neutral", self.deadman);
@@ -495,13 +552,6 @@ impl Engine {
 
     fn step_once(&mut self) -> bool {
         let t0 = Instant::now();
-        let h = self.scene.world.settings().timestep;
-        for (i, &r) in self.rates.iter().enumerate() {
-            if r != 0.0 {
-                let v = self.scene.controls.actuators()[i].value() + r * h;
-                let _ = self.scene.controls.set_index(i, v);
-            }
-        }
         let r = if self.manual { self.scene.step_manual() } else { self.scene.step() };
         self.step_wall_us = t0.elapsed().as_secs_f64() * 1e6;
         match r {
@@ -609,4 +659,15 @@ fn apply_budget(scene: &mut Scene, max_solve_us: Option<f64>) -> Result<(), crat
         scene.world.set_settings(s)?;
     }
     Ok(())
+}
+
+/// Encodes a control reply; one too long for the wire is replaced by a short `internal` error.
+fn encode_reply(reply: &msgs::ControlReply) -> Vec<u8> {
+    let mut buf = Vec::new();
+    if let Err(e) = reply.encode(&mut buf) {
+        let r = msgs::ControlReply::error(reply.id, msgs::ControlErrorCode::Internal, format!("reply: {e}"));
+        buf.clear();
+        let _ = r.encode(&mut buf);
+    }
+    buf
 }

@@ -20,7 +20,8 @@ use pivotsim_link::iox as link;
 use pivotsim_msgs as msgs;
 use tracing::{info, warn};
 
-use super::{ErrorThrottle, Frames, Inbound, InboxSender, ServeError, Transport};
+use super::config::ServeError;
+use super::transport::{ErrorThrottle, Frames, Inbound, InboxSender, Transport};
 
 /// Bytes a published frame may take before the publisher reallocates (a pose frame of 500 bodies).
 pub const INITIAL_FRAME_BYTES: usize = 64 * 1024;

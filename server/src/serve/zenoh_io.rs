@@ -28,7 +28,8 @@ use zenoh::pubsub::{Publisher, Subscriber};
 use zenoh::qos::{CongestionControl, Priority};
 use zenoh::query::Queryable;
 
-use super::{ErrorThrottle, Frames, Inbound, InboxSender, ServeError, Transport, ZenohOptions};
+use super::config::{ServeError, ZenohOptions};
+use super::transport::{ErrorThrottle, Frames, Inbound, InboxSender, Transport};
 
 fn err(e: impl std::fmt::Display) -> ServeError {
     ServeError::Transport { transport: "zenoh", message: e.to_string() }

@@ -54,15 +54,34 @@ pub struct EventName {
 }
 
 impl EventName {
-    /// The name, cut to 32 bytes at a character boundary.
+    /// The name as a wire name (`msgs/README.md`, events: 1 to 32 bytes of `[A-Za-z0-9_.\-/]`):
+    /// every character outside that set becomes one `_`, an empty name is `_`, and a name of more
+    /// than 32 characters keeps its first 30 and ends in `..`, so that a refused fault's target of
+    /// any length or spelling still gives a record, marked where it was changed.
     pub fn new(s: &str) -> Self {
-        let mut end = s.len().min(32);
-        while !s.is_char_boundary(end) {
-            end -= 1;
-        }
+        let mapped = s.chars().map(|c| {
+            if c.is_ascii_alphanumeric() || matches!(c, '_' | '.' | '-' | '/') { c as u8 } else { b'_' }
+        });
         let mut bytes = [0; 32];
-        bytes[..end].copy_from_slice(&s.as_bytes()[..end]);
-        EventName { bytes, len: end as u8 }
+        let mut len = 0;
+        if s.chars().count() > 32 {
+            for (dst, b) in bytes.iter_mut().zip(mapped.take(30)) {
+                *dst = b;
+            }
+            bytes[30] = b'.';
+            bytes[31] = b'.';
+            len = 32;
+        } else {
+            for b in mapped {
+                bytes[len] = b;
+                len += 1;
+            }
+        }
+        if len == 0 {
+            bytes[0] = b'_';
+            len = 1;
+        }
+        EventName { bytes, len: len as u8 }
     }
     /// As text.
     pub fn as_str(&self) -> &str {
