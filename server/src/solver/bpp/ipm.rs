@@ -152,8 +152,10 @@ impl Solver {
     ///   converge, the interior point's own answer stands;
     /// - not converged but within `CROSSOVER_BELOW`: pivoting from its index set for at most
     ///   `CROSSOVER_TRIAL` steps;
-    /// - still not converged: the same from the next of `IPM_STARTS`; after the last, pivoting
-    ///   resumes from the index set it had before the switch.
+    /// - still not converged: the same from the next of `IPM_STARTS`; after the last, the pivoting
+    ///   resumes exactly where it stopped (its `λ`, index set, frozen friction bounds, loop
+    ///   progress and best residual), so that a failed switch costs its own iterations and does
+    ///   not change the pivoting's path (`tests/solver_regression_big1000.rs`).
     pub(super) fn interior_point_with_crossover(&mut self, variant: super::Variant, friction: bool) -> bool {
         self.save_point();
         for &start in &IPM_STARTS {
@@ -188,27 +190,36 @@ impl Solver {
             }
         }
         // Far from a solution (its index set says little), or the trial failed: back to where
-        // the pivoting was.
+        // the pivoting was, which goes on as if it had never switched.
         self.restore_point();
-        self.bpp_loop(variant, friction, true)
+        self.resume_pivoting(variant, friction, self.ipm_progress)
     }
 
-    /// Keeps the index set and `λ` (`ipm_state`, `ipm_lam`) to come back to.
+    /// Keeps the point to come back to: the index set, `λ`, the frozen bounds, the best residual
+    /// and the pivoting loop's progress (`ipm_state`, `ipm_lam`, `ipm_lo`, `ipm_hi`, …).
     fn save_point(&mut self) {
         self.ipm_state.clear();
         self.ipm_state.extend_from_slice(&self.state);
         self.ipm_lam.clear();
         self.ipm_lam.extend_from_slice(&self.lam);
+        self.ipm_lo.clear();
+        self.ipm_lo.extend_from_slice(&self.lo_eff);
+        self.ipm_hi.clear();
+        self.ipm_hi.extend_from_slice(&self.hi_eff);
+        self.ipm_best_res = self.best_res;
+        self.ipm_progress = self.progress;
     }
 
-    /// Back to the kept index set and `λ`, with their frozen bounds and `w`.
+    /// Back to the kept point, with its `w`.
     fn restore_point(&mut self) {
         self.state.copy_from_slice(&self.ipm_state);
         self.lam.copy_from_slice(&self.ipm_lam);
         for (t, s) in self.tight.iter_mut().zip(&self.state) {
             *t = s.is_tight();
         }
-        self.update_bounds();
+        self.lo_eff.copy_from_slice(&self.ipm_lo);
+        self.hi_eff.copy_from_slice(&self.ipm_hi);
+        self.best_res = self.ipm_best_res;
         self.compute_w();
         self.l_valid = false;
     }

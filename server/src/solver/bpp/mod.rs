@@ -517,6 +517,13 @@ pub struct Solver {
     /// The index set and `λ` the interior point method started from or converged to (`ipm.rs`).
     ipm_state: Vec<IndexState>,
     ipm_lam: Vec<f64>,
+    /// The frozen bounds, best residual and loop progress kept with `ipm_state`, `ipm_lam`.
+    ipm_lo: Vec<f64>,
+    ipm_hi: Vec<f64>,
+    ipm_best_res: f64,
+    ipm_progress: Progress,
+    /// The progress of the last pivoting loop as it stopped.
+    progress: Progress,
     /// Scratch of the direct coupled Newton point (`coupled.rs`).
     cpl: coupled::CoupledWork,
 }
@@ -811,25 +818,43 @@ impl Solver {
     /// Júdice–Pires block pivoting with Murty's fallback for fixed bounds. Returns convergence.
     pub(super) fn bpp_loop(&mut self, variant: Variant, friction: bool, bounds_known: bool) -> bool {
         self.update_bounds();
-        // Without a warm-start λ the friction bounds are frozen at the first (all-free) solve.
-        let mut bounds_set = bounds_known;
         self.best_res = f64::INFINITY;
-        let mut progress = Progress::default();
         if friction && bounds_known && self.opts.newton_first && self.try_newton_first(variant) {
             return true;
         }
+        // Without a warm-start λ the friction bounds are frozen at the first (all-free) solve.
+        self.pivoting(variant, friction, Progress::default(), bounds_known)
+    }
+
+    /// The block pivoting resumed where a loop stopped for the interior point switch: `λ`, the
+    /// index set and the frozen bounds restored by the caller (`ipm.rs`), its progress counters
+    /// and best residual as that loop left them, so that a failed switch leaves the pivoting's
+    /// path as it was.
+    pub(super) fn resume_pivoting(&mut self, variant: Variant, friction: bool, progress: Progress) -> bool {
+        self.pivoting(variant, friction, progress, true)
+    }
+
+    /// The loop of pivot steps (eq. 4–6) and what follows each (`after_pivot`); leaves its
+    /// progress in `self.progress`.
+    fn pivoting(
+        &mut self,
+        variant: Variant,
+        friction: bool,
+        mut progress: Progress,
+        mut bounds_set: bool,
+    ) -> bool {
         let mut resolved = false;
-        loop {
+        let converged = loop {
             if !resolved {
                 if self.stop_now() {
-                    return false;
+                    break false;
                 }
                 self.pivot_solve(variant);
                 self.record_step();
                 if self.stats.regularized > 0 && self.prox_shift == 0.0 && self.opts.proximal {
                     // A is (numerically) singular: switch to proximal point iterations.
                     self.needs_prox = true;
-                    return false;
+                    break false;
                 }
                 if !bounds_set {
                     self.update_bounds();
@@ -837,11 +862,13 @@ impl Solver {
                 }
             }
             match self.after_pivot(variant, friction, &mut progress) {
-                Next::Return(converged) => return converged,
+                Next::Return(converged) => break converged,
                 Next::Pivot => resolved = false,
                 Next::Resolved => resolved = true,
             }
-        }
+        };
+        self.progress = progress;
+        converged
     }
 
     /// Judges the iterate of the current index set: an exact solution of the frozen problem goes
@@ -1179,7 +1206,8 @@ impl Solver {
 /// Progress of the block pivoting loop: the fewest infeasible variables since the last reset and
 /// the steps without a decrease; the best outer residual and the outer updates without a 10 %
 /// improvement of it.
-struct Progress {
+#[derive(Debug, Clone, Copy)]
+pub(super) struct Progress {
     best_ninf: usize,
     no_progress: usize,
     outer_best: f64,
