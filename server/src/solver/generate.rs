@@ -8,7 +8,7 @@ use rand::seq::SliceRandom;
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
-use super::{Mlcp, SymCsr};
+use super::{IndexState, Mlcp, SymCsr};
 
 type V3 = [f64; 3];
 
@@ -118,6 +118,17 @@ pub fn sweep_params(seed: u64) -> IslandParams {
 pub fn sweep_island(seed: u64) -> (IslandParams, Mlcp) {
     let params = sweep_params(seed);
     (params, contact_like_with(&params, seed))
+}
+
+/// The sweep's perturbed warm start from an answer `(λ, index set)` of island `seed`: every `λ_i`
+/// scaled by `1 + 0.2 u` (`u` uniform in ±1) and a tenth of the rows released to free (a
+/// simulation's warm start after a step that moved the island a little), deterministic in `seed`.
+pub fn perturbed_warm_start(lambda: &[f64], index: &[IndexState], seed: u64) -> (Vec<f64>, Vec<IndexState>) {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed ^ 0x5741_524D);
+    let lam0 = lambda.iter().map(|&x| x * (1.0 + rng.random_range(-0.2..0.2))).collect();
+    let index0 =
+        index.iter().map(|&s| if rng.random_range(0.0..1.0) < 0.1 { IndexState::Free } else { s }).collect();
+    (lam0, index0)
 }
 
 /// `nb` random bodies: the diagonal of each inverse mass matrix and each velocity (linear, angular).
