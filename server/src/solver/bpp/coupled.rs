@@ -19,26 +19,7 @@
 //! points — and only with the envelope kernels, whose envelope of `A` it factors on (the dense
 //! kernels of small islands keep GMRES).
 //!
-//! **Measured** (release, `auto`, cap 35, session of 2026-12-03 afternoon). The direct point's
-//! free-row residual on the winch's 12 hardest solves at contact compliance 1e-10 is 5e-15–1e-14
-//! (from 1e-2…9e-1) where GMRES stops at 5e-12–2e-9; with the LU forced, 7 of the 12 points of
-//! the hardest capped one are rejected (6e-5…4e2: the near-singular 2×2 blocks above). Solver time
-//! in-process, each problem solved in turn by a GMRES-only solver and by the default, medians
-//! of 31–81 alternated repeats (a GMRES-only pair of solvers reads 0.995–1.007): the islands
-//! dumped every 7th step of a 20 s run (172 problems each, their simulation warm starts) — winch
-//! 0.82–0.84×, winch at contact compliance 1e-10 0.84–0.87×; every 11th step of the forklift,
-//! vehicle, forwarder and offshore runs 0.997–1.003×; the corpus (the hardest solves, where the
-//! points are few or rejected) 1.001×. (A first cost model that bounded GMRES by `coupled + 1`
-//! iterations chose the LU where GMRES needs 3–7: corpus 1.055×.) The eight 20 s scene runs keep
-//! every capped count and largest residual (the winch at 1e-10 moves its mean pivot steps 6.89 →
-//! 6.90: the exact points round differently). On the corpus (`solver_corpus.rs`), warm and cold
-//! at cap 100, both ways converge on the same 52 of 60 solves and reach the same impulses on all
-//! 22 warm ones. The capped solves, whose longest-solve target this was meant to help, gain
-//! nothing: their points are the rejected ones. Nor does GMRES preconditioned by a rejected
-//! point's LU rescue them: its Arnoldi estimate falls to 1e-13 after one vector while the true
-//! residual stays at 0.1–4e2 (the LU's answer carries a huge component along a near-null
-//! direction, which the product with the coupled matrix cancels in rounding) — measured on the
-//! winch's three capped files at 1e-10, and dropped.
+//! What the direct point gains and where it is rejected, measured: `docs/notes/solver.md`.
 
 use std::time::Instant;
 

@@ -1,231 +1,58 @@
 //! Block principal pivoting (Júdice–Pires 1994; paper §3.1–3.3, eq. 4–6, Alg. 1 and 2) with the
-//! factor strategies of [`Variant`], a monotone safeguard, friction coupling and a proximal mode for
-//! semidefinite `A`.
+//! factor strategies of [`Variant`], a monotone safeguard, friction coupling, an interior point
+//! switch and a proximal mode for semidefinite `A`. What was measured and what was tried and
+//! dropped is in `docs/notes/solver.md`.
 //!
 //! **One pivot step.** For the index set `(F, T_lo, T_hi)` set `λ_T` to its bounds and solve
 //! `A_FF λ_F = b_F − A_FT λ_T` (eq. 6), then `w = Aλ − b` (eq. 5). A variable is *infeasible* when
 //! `i ∈ F` and `λ_i ∉ [lo_i, hi_i]`, `i ∈ T_lo` and `w_i < 0`, or `i ∈ T_hi` and `w_i > 0`; the block
 //! pivot moves every infeasible variable to the set eq. 4 names. A block pivot is exactly a full
-//! semismooth Newton step on the natural map `r(λ) = λ − clamp(λ − w, lo, hi)`.
+//! semismooth Newton step on the natural map `r(λ) = λ − clamp(λ − w, lo, hi)`. The sign of `w_i`
+//! on a tight row is trusted beyond a per-row rounding scale `1e-13 (|b_i| + ‖A_i‖₁ ‖λ‖∞)`.
 //!
 //! **Safeguard.** When the number of infeasible variables has not decreased for `murty_after`
-//! steps (default 0: at the first block pivot that does not lower it), either Murty's rule pivots only the infeasible variable of largest index (Júdice–Pires:
-//! finite for SPD `A` and fixed bounds, [`Fallback::Murty`]), or — the default,
-//! [`Fallback::ProjectedNewton`] — a primal feasible active-set method on the strictly convex box
-//! QP whose optimality system the boxed LCP is (`safeguard.rs`): projected Newton steps while they
-//! decrease the objective clearly, else exact ratio-test steps to the first blocking bound; every
-//! step a pivot step with the same factor reuse, finite, ending on an exact pivot step.
+//! steps (default 0: at the first block pivot that does not lower it), either Murty's rule pivots
+//! only the infeasible variable of largest index (Júdice–Pires: finite for SPD `A` and fixed
+//! bounds, [`Fallback::Murty`]), or — the default, [`Fallback::ProjectedNewton`] — a primal
+//! feasible active-set method on the strictly convex box QP `min ½λᵀAλ − bᵀλ` whose optimality
+//! system the boxed LCP is (`safeguard.rs`): projected Newton steps while they decrease the
+//! objective clearly, else exact ratio-test steps to the first blocking bound; every step a pivot
+//! step with the same factor reuse, finite, ending on an exact pivot step.
 //!
-//! **Why real islands are hard** (measured on `server/tests/data/corpus`, the hardest solves of the
-//! shipped scenes, with the per-file numbers in its README):
-//! - *Redundant contact sets* (a wheel or a fork touching at several points, 42 claw teeth on a
-//!   log): `A` is singular but for the contact compliance (smallest eigenvalue `c/h²` = 3.6e-7,
-//!   cond 2e9–1e12). Block pivoting cycles among equivalent distributions of the load; projected
-//!   Newton with an Armijo search then zig-zagged (30–870 steps of `α ≈ 1e-4` with `f` changing
-//!   in its tenth digit: on a flat valley the Armijo test compares rounding); the ratio-test
-//!   active-set safeguard needs 4–22 steps on the forklift's, but 200–250 single bound changes on
-//!   the forwarder's grasp.
-//! - *Extreme diagonals*: a 0.08 kg pin against a 520 kg boom puts 3.9e5 beside 2e-3 on the
-//!   diagonal; a tolerance scaled by the largest diagonal accepted `w = −1.1e-5` on a normal row at
-//!   0 (violated complementarity, reported `inexact`). `find_infeasible` scales per row.
-//! - *Friction coupling that cycles*: stiff contacts sliding (the winch's chain on the ground at
-//!   contact compliance 1e-10, one forwarder grasp step): the outer update of the friction bounds
-//!   and the semismooth Newton fallback alternate between index sets for hundreds of steps.
+//! **Friction coupling** (the outer loop). Friction bounds `±μ λ_n` move with the normal impulses;
+//! pivoting with bounds that change at every step cycles. The bounds are frozen at the current
+//! normal impulses and that boxed LCP solved exactly; then, with the settled index set, the exact
+//! coupled Newton point in which tight friction rows follow their free normal impulse is taken
+//! (`coupled.rs`), globalized by backtracking on the true natural-map residual against a
+//! non-monotone reference, the bounds updated from it, and the solve continues from the same
+//! index set — with the active-set safeguard ([`SolverOptions::safeguard_after_update`]), its tight
+//! rows at their moved bounds. This is Newton's method on the outer fixed point
+//! `λ_n ↦ λ_n(bounds(λ_n))`; when it stalls (no 10 % gain of the best residual in 4 updates) the
+//! semismooth Newton method on the whole natural map takes over from the best iterate for a budget
+//! of steps, after which the outer iteration resumes with block pivots. Every iterate is judged by
+//! the natural-map residual against the bounds at its own normal impulses. The outer loop has no
+//! proof of convergence, and it can cycle (`docs/notes/solver.md`, "Generated-island sweep").
 //!
-//! - *A capped solve starts a cascade* (measured in simulation, `run --stats`): the winch at contact
-//!   compliance 1e-10 with a cap of 1000 needs a median of 2 pivot steps a solve (p90 20–24,
-//!   50–70 of 1,200 solves above 35), but at the cap of 35 its first, cold solve (48 steps
-//!   uncapped) stops short, the step after starts from a poorer state and warm start, and
-//!   1,000+ of the 1,200 solves end capped. Tail steps, not typical ones, decide such a run.
+//! **Interior point switch** (`ipm.rs`, [`SolverOptions::ipm_cold_after`],
+//! [`SolverOptions::ipm_after`]): a solve that has not converged after a few pivot steps runs
+//! Mehrotra's predictor–corrector on the friction-coupled problem itself, then crosses over to the
+//! exact solution of the index set it identifies. A run that fails hands the pivoting back its
+//! whole point (λ, index set, frozen bounds, loop progress): the switch costs its own iterations
+//! and does not change the pivoting's path. On by default for cold solves with friction.
 //!
-//! **After an outer friction update** ([`SolverOptions::safeguard_after_update`], on by default;
-//! scene setting `safeguard_after_update`) the frozen problem changed only by its friction boxes;
-//! the solve continues with the active-set safeguard from the last index set, its tight rows at
-//! their moved bounds and the free ones projected onto theirs (`Start::IndexSet`), where block
-//! pivots from that index set flail 10–20 steps among redundant contacts (forklift at contact
-//! compliance 1e-10), and hands over to the semismooth Newton fallback after 4 stalled updates
-//! (12 without it). Together with `murty_after = 0` (the safeguard from the first block pivot
-//! that does not lower the infeasible count) this is the default since it was measured in
-//! simulation, at the paper's cap of 35, against the earlier defaults (`murty_after = 3`, block
-//! pivots after updates); capped solves of 20 s runs, `auto` / `skyline`:
-//!
-//! | scene | earlier defaults | safeguarded | + joints held (now) | joint error now |
-//! |---|---|---|---|---|
-//! | forklift, shipped | 0 / 0 | 0 / 0 | 0 / 0 | 7.6e-5 m |
-//! | forklift, contact compliance 1e-10 | 139 / 143 | 34 / 7 | 9 / 9 | 7.6e-5 m (was 5.7 mm) |
-//! | winch, shipped | 0 / 0 | 0 / 0 | 0 / 0 | 4.5e-7 m |
-//! | winch, contact compliance 1e-10 | 42 / 42 | 37 / 44 | 31 / 48 | 4.5e-7 m |
-//! | forwarder, cap 35 (ships 300) | 55 / 112 | 20 / 20 | 8 / 8 | 9.9e-5 m (was 6.1 cm) |
-//!
-//! (Which solves stop at the cap depends on the trajectory, and that on rounding: with `auto`
-//! factoring `L₀` only when it deletes from it, the forklift's count went from 7 to 34 and the
-//! winch's from 50 to 37 — the spread of these counts, not a change of method.) "Joints held":
-//! a capped answer has its bilateral rows solved exactly for the contact impulses it returns
-//! (`exact_bilateral`, `safe.rs`); a capped grasp no longer pulls the machine apart, so the steps
-//! after it start from a consistent state and fewer of them cap (the forwarder's cascade of 19
-//! capped steps after its hardest island is 8 long; its log ends 2.4 cm from the uncapped run's
-//! instead of 9.0).
-//!
-//! On the corpus (warm starts cut from capped runs) it gains warm files (within 35 steps 12 → 15
-//! of 30, within 100 19 → 22) and loses cold ones within 35 (13 → 11). Its price is the tail of
-//! friction cycles, which the safeguarded updates do not break: when they stall and the Newton
-//! fallback after them does too, the solve goes on with block pivots after its updates. With no
-//! cap (1000) the winch at 1e-10 then has 27 solves above 35 steps (earlier defaults 40) and 9 that
-//! never converge (earlier defaults 8; 15 without the switch). Starting the safeguard from the ε-binding set of the projected iterate
-//! instead, as it starts after a stalled block pivot, lost the rows whose bounds had moved away
-//! (the winch's chain: 116 bound rows before an update, 73 after, then one ratio-test step per
-//! row to bind them again): 153 capped solves on that winch and 116 on the forwarder.
-//! What else was measured and dropped (session of 2026-12-01, corpus and scenes): an exact
-//! search along the projected Newton path (first local minimiser of the piecewise quadratic, so
-//! several bounds bind per step) changed no count — its first minimiser comes after 1–5
-//! breakpoints; a regularised (Levenberg–Marquardt) semismooth Newton step `(A_FF + ρI)`,
-//! `ρ ∝ ‖r‖`, solved 6–7 of 30 warm files within 35 steps instead of 15 (the flat directions of redundant contacts
-//! converge at the rate `ρ/(ρ + σ)`); a first solve with a larger compliance as a warm start
-//! (`A + δI`, δ = 1e-6…1e-3 of the largest diagonal) converged in 7–18 steps, but its index set
-//! was far from the true one (the stiff contacts' impulses are set by the compliance: the
-//! optimum's `f` −96 against −733) and the whole took 45–66 steps; ordering the warm start's
-//! tight rows last (deletions then cost nothing) turned the winch's band (bandwidth 20) into an
-//! arrow (73) and made it 3× slower. The step counts of eight strategies on every corpus file
-//! are in the corpus README.
-//!
-//! **Measured and dropped in the session of 2026-12-03** (release, `auto`; the forklift's four
-//! solves at contact compliance 1e-10 that the defaults do not finish warm within 1,000 steps,
-//! steps 446/447/451/455, 203 rows; the forwarder's three solves above 35 steps in its exact, cap-1000
-//! trajectory, steps 931/785/786 with 144/42/40 steps; in simulation the eight 20 s runs at the
-//! paper's cap):
-//! - *Friction coupling alone makes the forklift's four hard.* With the friction boxes frozen at
-//!   the solution's normals its warm start converges in 11–13 steps (9 of them the active-set
-//!   safeguard); the plain outer fixed point (`coupled_update` and `newton_fallback` off) needs
-//!   15–46 bound updates of 2–3.5 steps each (41–92 steps), the defaults 1,000+ (148 of 150 coupled
-//!   points damped, semismooth Newton cycling with a period of about 11).
-//! - *Anderson acceleration of the outer fixed point in the normals* (type II, depth 1–5, instead
-//!   of the coupled update): fewer updates (depth 2: 16/9/86/14 against 46/24/26/15) but each
-//!   extrapolated freeze point is farther from the last index set, so more steps per update:
-//!   111/69/789/112 steps at depth 2, 1,000+ on one file at depths 1, 3 and 5.
-//! - *Early crossover from the interior point method* (winch at 1e-10, its 12 hardest solves): the
-//!   exact solve of the index set the iterate identifies (`s < z`), frozen or coupled, keeps a
-//!   residual of 0.2–1.0 while the method's own falls to 1e-6, and 1.7e-4 when it reaches 1e-10:
-//!   many pairs stay `s ≈ z ≈ 0` (degenerate solutions of redundant stiff contacts), so no
-//!   identification before convergence shortens its 13–26 iterations. In simulation `ipm_after`
-//!   0…4 with `newton_first` gave 11, 14, 15, 4, 3 capped solves at 1e-10 (4 is shipped).
-//! - *The safeguard's steps are mostly degenerate* (`safeguard.rs`): on forwarder 931, 64 of 106
-//!   non-final safeguard steps have a ratio-test step of 0 (a free variable already on its bound
-//!   that the face minimiser pushes out: a linear solve that binds it and moves nothing); the
-//!   forklift's `hard03` 91 of 145. Their full projected Newton points truly raise `f` (by
-//!   1e1…1e10; only 2–9 % of them lower it), so an Armijo test computed without cancellation —
-//!   `Δf = ½ sᵀ(w_old + w_new)` from the step `s` instead of two values of `f` — changed no count. Binding every free variable
-//!   on a bound up front (after an outer update, and in the ε-binding set whatever its gradient)
-//!   cut forwarder 931 144 → 72 steps and 786 40 → 22, but in simulation the forwarder went 8 → 50
-//!   capped solves (a cascade from another grasp step), the forklift at 1e-10 9 → 10, the winch at
-//!   1e-10 3 → 8 + 4 inexact; each half alone: forwarder 173 (after updates) / 48 (ε-binding set).
-//! - *The forwarder's log* ends 2.4 cm from the exact run's; the exact runs with `full`, `skyline`
-//!   and `auto` agree to 0.1 mm, so all of it comes from the 8 capped solves (785 and 931–937:
-//!   931 needs 144 steps, the six after it follow from its capped answer). `polish_sweeps` 0 / 100
-//!   gave 6.2 cm (7 capped) / 24 cm (105 capped, a cascade), `exact_bilateral = false` 9.0 cm.
-//! - *A cold start after a capped solve.* The capped answer at 931 makes the next steps' warm
-//!   starts poor: alone, at cap 1000, the forwarder's 932–936 of the capped run need 467 to 1,000+
-//!   steps warm, but 23, 23, 27 and 73 cold (936: 1,000+ either way), where the interior point
-//!   method takes them after 3 steps. It is the warm `λ` that decides (it keeps the solve on the
-//!   pivoting path): without it but with the index set the counts are the cold ones (931 itself
-//!   144 → 125), without the index set but with `λ` the warm ones. In simulation (the next step of an
-//!   island after a capped solve without its warm start) the cold solves converge, at 9–12 ms each
-//!   (27 steps of ~350 µs LU on 222 rows), but the steps after them cap again, every other step
-//!   from 940 on: forwarder 8 → 177 capped solves, longest 21 ms; forklift at 1e-10 9 → 8, winch at
-//!   1e-10 3 → 3. (The interior point solution need not be the one the warm pivoting would reach:
-//!   with friction coupled to the normals the problem can have several.) Carrying the last
-//!   converged step's warm start past a capped solve instead of its answer: forwarder 8 → 31
-//!   capped (log 2.7 cm off), forklift at 1e-10 9 → 10, winch at 1e-10 3 → 3.
-//! - *What happens at forwarder 931* (its solution against its warm start, the exact trajectory):
-//!   the grapple's motor row goes from free (−34 N m s) to its relief bound (166.7 = 10 kN m × h),
-//!   three unloaded teeth take load, seven start to slide (four on both friction rows, their
-//!   normals 53 → 40, 31, 22, 13 N s; three on one, 63 → 54, 48, 42); 35 of 84 friction rows and
-//!   3 of 42 normals change state. In the capped run the six solves after it (932–937) never finish a first frozen
-//!   problem within 35 steps (no bound update) and return their warm start — the answer before —
-//!   as the candidate of smallest residual: the cascade is that answer handed on. Handing on the
-//!   best iterate instead (the warm start no candidate) is far worse: forwarder 8 → 227 capped
-//!   solves, the log 62 cm from the exact run's (forklift and winch at 1e-10 unchanged, 9 and 3).
-//! - *Releasing fewer at a face minimiser* (`safeguard.rs`; only the `k` bound variables of largest
-//!   predicted decrease `w_i² / A_ii`, `k` = 1, 2, 4, 8, or those within 0.01–0.5 of the largest):
-//!   forwarder 931 144 → 140–182 steps, 785/786 40–53; no file of the cascade or of the
-//!   forklift's four converged within 1,000 either way. The one-at-a-time re-binding after each
-//!   release (tight counts +1 per step for 4–10 steps, then −15…−30) is not caused by releasing
-//!   too many at once.
-//! - *Stiffness as a lever* (forwarder at the paper's cap): contact compliance 1e-9 → 94 capped
-//!   solves, 1e-8 → 1 (shipped 1e-10: 8): not monotone. Compliance on the motor rows (a hydraulic
-//!   stiffness) 1e-9 / 1e-8 → 318 / 364 capped; 1e-7 / 1e-6 → none, but the log stays on the
-//!   ground: a velocity row's compliance is a damper, so the servo's holding force then needs a
-//!   speed error. A hydraulic stiffness would need a position-level spring, not this.
-//! - *The interior point switch on the forwarder's warm solves* (`ipm_after` = 8, 10, 12, 15, 20,
-//!   25, 30): capped solves 21, 4, 17, 28, 28, 56, 348; the log within 1.4, 1.0, 1.6, 1.8, 1.9,
-//!   3.5 mm and 4.0 cm of the exact run's; mean solve 2.5, 0.57, 1.7, 1.8, 0.51, 0.37, 1.9 ms.
-//!   Its capped iterates serve the log better than the frozen ones (mm, not cm, with more capped
-//!   solves), but once a solve has switched the next ones keep switching (`ipm_after` = 10: 74
-//!   solves above 10 steps, 626 of 717 ms of solve time, steps 873–884, 901–925 and 931–945 at
-//!   20–35 steps each): an interior solution is a poor warm start for the pivoting.
-//! - *A convex friction model, prototyped* (Anitescu's relaxation, the route proposed to the
-//!   steering team): each contact's pyramid `|λ_t1|, |λ_t2| ≤ μ λ_n` written as the cone of its four
-//!   generators `e_n ± μ e_t1 ± μ e_t2`, `λ_c = E β`, `β ≥ 0`, and the box LCP in `β` with `EᵀAE`
-//!   solved by this solver (no friction index left: fixed bounds, a strictly convex QP once `EᵀAE`
-//!   is made definite). Warm starts mapped to `β` by the product split `β_{±±} = (λ_n ± a)(λ_n ±
-//!   b) / 4λ_n`, `a, b` the friction impulses over `μ`. With only the null direction
-//!   `(1, −1, −1, 1)` of each contact penalised (the exact convex model) the forwarder's eleven hard
-//!   files need 12–67 steps warm (eight above 35) and the forklift's four 9–45; with a generator
-//!   compliance `ε I` of 1e-9 of the largest diagonal (about the contacts' own `c/h²`) 5–29 and
-//!   14–35, but the corpus at contact compliance 1e-10 still 18–68 (winch) and 14–48 (forklift).
-//!   And its known artefact is large at `μ = 1`: a sliding contact opens at `μ |v_t|`, measured on
-//!   these files as normal velocities up to 0.75 m/s (forwarder), 0.15–0.5 m/s on the forklift
-//!   (4.1 m/s on one contact) and 0.08–0.3 m/s on the winch's chain: 1–12 mm of lift per step at
-//!   h = 1/60 (68 mm at the worst). Neither within the paper's cap nor acceptable physics: dropped.
-//!
-//! **Semismooth Newton first** ([`SolverOptions::newton_first`], off by default; scene setting
-//! `newton_first`): a warm-started solve with friction first takes up to `NEWTON_FIRST_BUDGET`
-//! semismooth Newton steps on the true, moving bounds, leaving early when `‖r‖²` does not halve
-//! in `NEWTON_PATIENCE` steps, then block pivots from its warm start. Measured: corpus warm within
-//! 35 steps 12 → 13 of 30; without bail-out and budget it solved the winch's sliding chain at
-//! 1e-10 in 11–12 steps, where the outer iteration cycles, and the shipped winch in 2–7 instead of
-//! 8–13, but stalls on redundant contact sets; in simulation mean pivot steps winch 1.79 → 1.57,
-//! with more capped solves on the forklift and forwarder, where its steps are spent in vain.
-//! Which a scene wants is a measured choice, so both are settings.
+//! **Semismooth Newton first** ([`SolverOptions::newton_first`], off by default): a warm-started
+//! solve with friction first takes up to `NEWTON_FIRST_BUDGET` semismooth Newton steps on the true,
+//! moving bounds, leaving early when `‖r‖²` does not halve in `NEWTON_PATIENCE` steps, then block
+//! pivots from its warm start.
 //!
 //! **Safe when capped.** A solve stopped by the step cap or the time budget
-//! ([`Solver::set_deadline`], [`SolverOptions::max_solve_us`]) returns its last exact solution
-//! with frozen friction bounds when it has one (complementary, with friction boxes from an
-//! intermediate normal, as ODE's solver returns; [`SolverOptions::prefer_frozen`]), else the better
-//! (smaller true residual) of its best iterate and its warm start — each made safe (`safe.rs`): projected onto the feasible set (every box,
-//! normals ≥ 0, friction within `±μ λ_n` of the returned normal) and, when its merit
-//! `f = ½λᵀAλ − bᵀλ` is positive (it would add energy to the step), scaled towards zero to
-//! `f ≤ 0`. Every solve, converged or not, returns through the same projection. Preferring the
-//! frozen solution over the smallest residual is measured: at cap 35 the forwarder keeps its log
-//! (2.13 m up at the end, 2.44 m uncapped) where the smallest-residual candidate drops it 14 m
-//! away, and the forklift at contact compliance 1e-10 ends with 0.12 m of joint error, not 0.45 m.
-//!
-//! **Polished when capped.** A capped answer whose residual exceeds
-//! [`SolverOptions::polish_above`] gets [`SolverOptions::polish_sweeps`] projected Gauss–Seidel
-//! sweeps with the true friction bounds from it, and is made safe again (`safe.rs`): pivoting
-//! that stalls must not return less than PGS reaches in the same time, and measured on the
-//! corpus it did on 33 of 35 capped solves. This is what keeps the winch and the forklift stable
-//! at contact compliance 1e-10 and the paper's cap (measurements in `safe.rs`).
-//!
-//! **Friction coupling.** Friction bounds `±μ λ_n` move with the normal impulses; pivoting with
-//! bounds that change at every step cycles (measured on `tests/data/scene-shaped`). We freeze the
-//! bounds at the current normal impulses and solve that boxed LCP exactly; then, with the settled
-//! index set, take the exact coupled Newton point in which tight friction rows follow their free
-//! normal impulse (`coupled.rs`: GMRES preconditioned by the factor at hand, or one envelope LU of
-//! the coupled matrix where that is cheaper — the winch's solves −16…−18 %), update the bounds
-//! from it and continue from the same index set. This is Newton's method on the outer fixed point
-//! `λ_n ↦ λ_n(bounds(λ_n))`; it needed 1–12 outer updates on every test problem where the plain
-//! fixed point (ODE/Bullet style) stalled. The factor of `A` is computed once and reused by every
-//! step. Every iterate is judged by the natural-map residual against the bounds at its own normal
-//! impulses.
-//!
-//! **Interior point switch** (`ipm.rs`, [`SolverOptions::ipm_cold_after`], [`SolverOptions::ipm_after`]):
-//! a solve that has not converged after a few pivot steps runs Mehrotra's predictor–corrector on
-//! the friction-coupled problem itself (bounds `±μ λ_n` as constraints, one envelope LU per
-//! iteration, each counted as a pivot step), then crosses over to the exact solution of the index
-//! set it identifies. Redundant contact sets and friction that cycles — what makes the corpus
-//! hard — cost it nothing special: 12–22 iterations where pivoting needs up to 300. On by default
-//! for cold solves (corpus cold within 35 steps 11 → 27 of 30, within 100 21 → 30, with a second start for a stalled run); for warm ones
-//! a scene setting (measured mixed in simulation, see `ipm.rs`).
+//! ([`Solver::set_deadline`], [`SolverOptions::max_solve_us`]) returns its last exact solution with
+//! frozen friction bounds when it has one ([`SolverOptions::prefer_frozen`]), else the better of its
+//! best iterate and its warm start, each made safe (`safe.rs`: projected onto the feasible set and,
+//! when the merit `f = ½λᵀAλ − bᵀλ` is positive, scaled towards zero to `f ≤ 0`), polished by
+//! [`SolverOptions::polish_sweeps`] projected Gauss–Seidel sweeps when its residual exceeds
+//! [`SolverOptions::polish_above`], and its bilateral rows solved exactly for its contact impulses
+//! ([`SolverOptions::exact_bilateral`]).
 //!
 //! **Semidefinite `A`.** When the factorization has to regularize pivots, the solve switches to
 //! proximal point iterations on `A + ρI` (`safeguard.rs`), judged against the original problem.
@@ -233,34 +60,17 @@
 //! **Factor strategies** (`factor.rs`). `full`: gather and factor the compact `A_FF` each step.
 //! `downdate`: dense `L₀ = chol(A)` once, per step copy + deletions (`dense.rs`). `skyline`: reorder
 //! (CM/RCM), envelope `L₀`, per step copy of the columns from `g_{min T}` on + deletions on the
-//! skyline (`envelope.rs`), each sweep stopping at the last free index (the columns of a trailing
-//! tight block do not matter: each becomes identity at its own deletion) and skipping the columns
-//! of the tight indices still to be deleted (`Envelope::delete_pending`: `chol(A_FF)` is `L₀`'s free
-//! block after one rank-1 update per tight column, each rotating through free columns only;
-//! measured on the forwarder, whose grasp deletes many rows: mean solve per step with `skyline`
-//! 236 → 150 µs; in the report 0.5× → 0.9× the speed of `full`). When the tight set only grew
-//! since the last pivot step, `skyline` deletes just the new tight indices from the factor it has
-//! (deletions commute, so this is the copy of `L₀` with all of them deleted, less the work already
-//! done; still no refactorization). Measured paired against `full` on the same problems
-//! (`run --variant full --shadow skyline`): forwarder 0.91× → 1.26× (steps with tight rows 0.82× →
-//! 1.18×), winch 5.1× → 6.0×, forklift 2.1× → 2.2×; alone, the forwarder's steps with tight rows
-//! 171–201 → 121–129 µs against `full`'s 153–159, its longest solve 6.2–8.1 → 3.0–3.1 ms, the
-//! vehicle's 7.0 → 3.0 ms. `skyline-refactor`: envelope factor of `A_FF ⊕ I` per step.
-//! `incremental`: keep the last factor and refactor from the first index whose state changed.
-//! `auto`: per step the cheapest predicted of deletions from `L₀`, deletions from the last factor
-//! (when `T` only grew) and the incremental refactor, from the skyline cost model; `L₀` itself is
-//! factored only when first chosen (its cost is part of the first choice's), since a warm-started
-//! solve often never uses it. Measured (20 s, mean solve per step): forklift 171 → 144 µs, winch
-//! 250 → 215, forwarder 139 → 86, crane 127 → 122. A per-step comparison that charges `L₀`'s
-//! whole cost to the step that first wants it never buys it in a long solve, though every later
-//! step would amortize it: on the vehicle's dense-ish island (`L₀` ≈ 170 µs, a refactor 100–160
-//! µs, copy and deletions ≈ 60 µs) `auto` refactored at every step and was 1.2–1.6× slower than
-//! `skyline`. So `L₀`'s cost counts only as far as this solve's refactors have not yet paid it
-//! (ski rental: never worse than twice the better choice in hindsight); measured on the vehicle's
-//! eight hardest islands: 1.0–1.6× faster, at or below `skyline` on each but one (2 % above).
-//! Each rotated column of a deletion counts at least `ROTATION_MIN_ENTRIES` entries in the model
-//! (`factor.rs`): with many pending tight rows the swept columns are short and their square
-//! roots and divisions, not their entries, set the cost; the forwarder's capped grasps −33 %.
+//! skyline (`envelope.rs`), each sweep stopping at the last free index and skipping the columns of
+//! the tight indices still to be deleted (`chol(A_FF)` is `L₀`'s free block after one rank-1 update
+//! per tight column, each rotating through free columns only); when the tight set only grew since
+//! the last pivot step, just the new tight indices are deleted from the factor at hand (deletions
+//! commute). `skyline-refactor`: envelope factor of `A_FF ⊕ I` per step. `incremental`: keep the
+//! last factor and refactor from the first index whose state changed. `auto`: per step the
+//! cheapest predicted of deletions from `L₀`, deletions from the last factor (when `T` only grew)
+//! and the incremental refactor, from the skyline cost model; `L₀` is factored only when first
+//! chosen, its cost counted only as far as this solve's refactors have not yet paid it (ski
+//! rental: never worse than twice the better choice in hindsight), and each rotated column of a
+//! deletion counts at least `ROTATION_MIN_ENTRIES` entries.
 
 mod coupled;
 mod factor;
@@ -293,7 +103,7 @@ pub struct SolverOptions {
     /// solve that spends it returns its best safe iterate with status `Budget` (`None`: no budget).
     pub max_solve_us: Option<f64>,
     /// Block pivots without a decrease of the infeasible count before the safeguard takes over
-    /// (0: at the first that does not decrease it; measured in the module docs).
+    /// (0: at the first that does not decrease it; measured in `docs/notes/solver.md`).
     pub murty_after: usize,
     /// Measure `‖L_deleted − chol(A_FF)‖_F` at every deletion step (costly; for Table 4).
     pub measure_deletion_error: bool,
@@ -344,7 +154,7 @@ pub struct SolverOptions {
     /// method on the coupled problem (`ipm.rs`), once; `usize::MAX`: never.
     pub ipm_after: usize,
     /// The same switch for a cold solve with friction (no warm `λ`): after this many pivot steps
-    /// (default 3: easy problems finish before it; measured in `ipm.rs`); `usize::MAX`: never.
+    /// (default 3: easy problems finish before it; measured in `docs/notes/solver.md`); `usize::MAX`: never.
     pub ipm_cold_after: usize,
     /// Halvings of the step tried along the projection arc `P(λ + t (λ̂ − λ))` when the full
     /// projected Newton step of the active-set safeguard fails its Armijo test (`safeguard.rs`);
