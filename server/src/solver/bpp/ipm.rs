@@ -83,7 +83,11 @@ impl Solver {
     ///   resumes exactly where it stopped (its `λ`, index set, frozen friction bounds, loop
     ///   progress and best residual), so that a failed switch costs its own iterations and does
     ///   not change the pivoting's path (`tests/solver_regression_big1000.rs`).
-    pub(super) fn interior_point_with_crossover(&mut self, variant: super::Variant, friction: bool) -> bool {
+    pub(super) fn interior_point_with_crossover(
+        &mut self,
+        variant: super::super::Variant,
+        friction: bool,
+    ) -> bool {
         self.save_point();
         for &start in &IPM_STARTS {
             self.ipm.start = start;
@@ -467,7 +471,7 @@ fn step_to_zero(x: f64, dx: f64) -> f64 {
 #[derive(Debug, Default)]
 pub(super) struct IpmWork {
     kind: Vec<RowKind>,
-    env: super::Envelope,
+    env: super::super::envelope::Envelope,
     lu: super::super::envelope_lu::EnvelopeLu,
     zl: Vec<f64>,
     zu: Vec<f64>,
