@@ -123,36 +123,36 @@ impl Solver {
         // Far from a solution (its index set says little), or the trial failed: back to where
         // the pivoting was, which goes on as if it had never switched.
         self.restore_point();
-        self.resume_pivoting(variant, friction, self.ipm_progress)
+        self.resume_pivoting(variant, friction, self.ws.saved.progress)
     }
 
     /// Keeps the point to come back to: the index set, `λ`, the frozen bounds, the best residual
     /// and the pivoting loop's progress (`ipm_state`, `ipm_lam`, `ipm_lo`, `ipm_hi`, …).
     fn save_point(&mut self) {
-        self.ipm_state.clear();
-        self.ipm_state.extend_from_slice(&self.state);
-        self.ipm_lam.clear();
-        self.ipm_lam.extend_from_slice(&self.lam);
-        self.ipm_lo.clear();
-        self.ipm_lo.extend_from_slice(&self.lo_eff);
-        self.ipm_hi.clear();
-        self.ipm_hi.extend_from_slice(&self.hi_eff);
-        self.ipm_best_res = self.best_res;
-        self.ipm_progress = self.progress;
+        self.ws.saved.state.clear();
+        self.ws.saved.state.extend_from_slice(&self.state);
+        self.ws.saved.lam.clear();
+        self.ws.saved.lam.extend_from_slice(&self.lam);
+        self.ws.saved.lo.clear();
+        self.ws.saved.lo.extend_from_slice(&self.lo_eff);
+        self.ws.saved.hi.clear();
+        self.ws.saved.hi.extend_from_slice(&self.hi_eff);
+        self.ws.saved.best_res = self.best_res;
+        self.ws.saved.progress = self.progress;
     }
 
     /// Back to the kept point, with its `w`.
     fn restore_point(&mut self) {
-        self.state.copy_from_slice(&self.ipm_state);
-        self.lam.copy_from_slice(&self.ipm_lam);
+        self.state.copy_from_slice(&self.ws.saved.state);
+        self.lam.copy_from_slice(&self.ws.saved.lam);
         for (t, s) in self.tight.iter_mut().zip(&self.state) {
             *t = s.is_tight();
         }
-        self.lo_eff.copy_from_slice(&self.ipm_lo);
-        self.hi_eff.copy_from_slice(&self.ipm_hi);
-        self.best_res = self.ipm_best_res;
+        self.lo_eff.copy_from_slice(&self.ws.saved.lo);
+        self.hi_eff.copy_from_slice(&self.ws.saved.hi);
+        self.best_res = self.ws.saved.best_res;
         self.compute_w();
-        self.l_valid = false;
+        self.ws.factor.l_valid = false;
     }
 
     /// Runs the interior point method from scratch on the current (permuted) problem, each
@@ -421,7 +421,7 @@ impl Solver {
             self.tight[i] = state.is_tight();
         }
         self.update_bounds();
-        self.l_valid = false;
+        self.ws.factor.l_valid = false;
     }
 }
 

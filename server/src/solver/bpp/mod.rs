@@ -83,6 +83,7 @@
 //! | `coupled.rs` | the exact coupled Newton point (GMRES or envelope LU) |
 //! | `ipm.rs` | the interior point switch and its crossover |
 //! | `safe.rs` | safe, polished answers of capped solves |
+//! | `workspace.rs` | the scratch, by stage: permuted, factor, Krylov, proximal, safe/warm, saved point |
 
 mod coupled;
 mod factor;
@@ -93,12 +94,14 @@ mod pivot;
 mod safe;
 mod safeguard;
 mod solver;
+mod workspace;
 
 pub use options::{Fallback, POLISH_SWEEPS, SolverOptions};
 use outer::OUTER_MEMORY;
 use pivot::Progress;
 pub use solver::Solver;
 use solver::{FactorIn, resize, size_to, us};
+use workspace::Workspace;
 
 #[cfg(doc)]
 use super::Variant;

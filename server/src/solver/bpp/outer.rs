@@ -30,8 +30,8 @@ impl Solver {
         progress: &mut Progress,
     ) -> Next {
         // The answer of a capped solve (module docs, "Safe when capped").
-        self.frozen.copy_from_slice(&self.lam);
-        self.have_frozen = true;
+        self.ws.safe.frozen.copy_from_slice(&self.lam);
+        self.ws.safe.have_frozen = true;
         if res_rel <= self.opts.tol_rel || res == 0.0 {
             // `w` is the one this residual was computed from.
             self.converged_at = Some((res, res_rel));
@@ -118,7 +118,7 @@ impl Solver {
         }
         self.lam_old.copy_from_slice(&self.lam);
         self.w_old.copy_from_slice(&self.w);
-        match self.coupled_newton(self.last_factor) {
+        match self.coupled_newton(self.ws.factor.last_factor) {
             None => return None,
             Some(true) => {}
             Some(false) => {

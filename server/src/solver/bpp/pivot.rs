@@ -142,10 +142,10 @@ impl Solver {
             return true;
         }
         self.non_finite = false;
-        self.lam.copy_from_slice(&self.warm_lam);
+        self.lam.copy_from_slice(&self.ws.safe.warm_lam);
         for i in 0..self.state.len() {
-            self.state[i] = self.state0[i];
-            self.tight[i] = self.state0[i].is_tight();
+            self.state[i] = self.ws.safe.state0[i];
+            self.tight[i] = self.ws.safe.state0[i].is_tight();
         }
         self.compute_w();
         self.update_bounds();

@@ -3,14 +3,13 @@
 
 use std::time::Instant;
 
-use super::super::envelope::Envelope;
-use super::super::ordering::{self, OrderingWorkspace};
+use super::super::ordering;
 use super::super::pgs::{PgsWorkspace, pgs_solve};
 use super::super::problem::reserve_touched;
 use super::super::{
     IndexState, Mlcp, OrderingKind, SolveStats, SolveStatus, SymCsr, Variant, natural_residual,
 };
-use super::{OUTER_MEMORY, Progress, SolverOptions, coupled, ipm};
+use super::{OUTER_MEMORY, Progress, SolverOptions, Workspace, coupled, ipm};
 
 /// Which buffer holds the factor of the current index set.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -30,21 +29,12 @@ pub(super) enum FactorIn {
 pub struct Solver {
     pub(super) opts: SolverOptions,
     pub(super) stats: SolveStats,
-    pub(super) ord_ws: OrderingWorkspace,
-    pub(super) perm: Vec<usize>,
-    pub(super) inv: Vec<usize>,
     pub(super) ap: SymCsr,
     pub(super) bp: Vec<f64>,
     pub(super) lop: Vec<f64>,
     pub(super) hip: Vec<f64>,
     pub(super) fip: Vec<Option<usize>>,
     pub(super) lam: Vec<f64>,
-    pub(super) kry_v: Vec<f64>,
-    pub(super) kry_h: Vec<f64>,
-    pub(super) kry_g: Vec<f64>,
-    pub(super) kry_cs: Vec<f64>,
-    pub(super) kry_sn: Vec<f64>,
-    pub(super) kry_z: Vec<f64>,
     pub(super) lam_old: Vec<f64>,
     pub(super) lam_hat: Vec<f64>,
     /// `w` at `lam_hat` (the safeguard's Newton point).
@@ -58,62 +48,16 @@ pub struct Solver {
     pub(super) hi_eff: Vec<f64>,
     pub(super) state: Vec<IndexState>,
     pub(super) tight: Vec<bool>,
-    pub(super) tight_l: Vec<bool>,
-    pub(super) tmp_tight: Vec<bool>,
-    pub(super) l_valid: bool,
     pub(super) infeasible: Vec<usize>,
-    pub(super) env: Envelope,
-    pub(super) l0: Vec<f64>,
-    /// `l0` holds `chol(A)` of the current problem (`auto` factors it lazily).
-    pub(super) l0_valid: bool,
-    pub(super) l: Vec<f64>,
-    pub(super) lref: Vec<f64>,
-    pub(super) sigma: Vec<f64>,
-    /// Prefix sums of the free columns' lengths (the `auto` cost model of deletions).
-    pub(super) free_sums: Vec<f64>,
-    /// Predicted cost of the refactors `auto` chose in this solve (its rent against `L₀`).
-    pub(super) refactor_spent: f64,
-    pub(super) dense_l0: Vec<f64>,
-    pub(super) dense_l: Vec<f64>,
-    pub(super) compact: Vec<f64>,
-    pub(super) free_idx: Vec<usize>,
     pub(super) pgs_ws: PgsWorkspace,
     pub(super) out_state: Vec<IndexState>,
     pub(super) max_diag: f64,
     pub(super) non_finite: bool,
     pub(super) best_res: f64,
     pub(super) kernel: Variant,
-    pub(super) pattern: SymCsr,
-    pub(super) pattern_ordering: Option<OrderingKind>,
-    pub(super) pattern_reused: bool,
-    pub(super) metrics: [usize; 4],
     pub(super) outer_hist: [f64; OUTER_MEMORY],
     pub(super) needs_prox: bool,
     pub(super) prox_shift: f64,
-    pub(super) diag0: Vec<f64>,
-    pub(super) bp0: Vec<f64>,
-    pub(super) center: Vec<f64>,
-    pub(super) prox_best: Vec<f64>,
-    pub(super) last_factor: FactorIn,
-    /// Every fixed box (rows without `findex`) contains 0 (`safe.rs`).
-    pub(super) zero_feasible: bool,
-    /// The candidate a polish started from (`safe.rs`).
-    pub(super) polish_save: Vec<f64>,
-    /// Scratch of `exact_bilateral` (`safe.rs`): the pivoting's tight set, the step `d` and `A d`.
-    pub(super) bil_tight: Vec<bool>,
-    pub(super) bil_d: Vec<f64>,
-    pub(super) bil_ad: Vec<f64>,
-    /// `1 / A_ii` of the permuted matrix, for the polish.
-    pub(super) inv_diag: Vec<f64>,
-    /// The warm-start index set, permuted (all free without one).
-    pub(super) state0: Vec<IndexState>,
-    /// The warm-start `λ₀`, permuted (zero without one): a candidate for a capped solve's answer.
-    pub(super) warm_lam: Vec<f64>,
-    /// The last exact solution of the problem with frozen friction bounds, if any (`have_frozen`).
-    pub(super) frozen: Vec<f64>,
-    pub(super) have_frozen: bool,
-    /// Position of each row's diagonal in `ap`'s values (per pattern).
-    pub(super) diag_at: Vec<usize>,
     /// The residual `(abs, rel)` the pivoting converged at, set where it returns with `λ` and `w`
     /// still that iterate's (the safe answer then needs no second `w = Aλ − b` and residual).
     pub(super) converged_at: Option<(f64, f64)>,
@@ -130,18 +74,12 @@ pub struct Solver {
     /// Pivot steps after which this solve switches to the interior point method (`usize::MAX`
     /// once it has, or never).
     pub(super) ipm_at: usize,
-    /// The index set and `λ` the interior point method started from or converged to (`ipm.rs`).
-    pub(super) ipm_state: Vec<IndexState>,
-    pub(super) ipm_lam: Vec<f64>,
-    /// The frozen bounds, best residual and loop progress kept with `ipm_state`, `ipm_lam`.
-    pub(super) ipm_lo: Vec<f64>,
-    pub(super) ipm_hi: Vec<f64>,
-    pub(super) ipm_best_res: f64,
-    pub(super) ipm_progress: Progress,
     /// The progress of the last pivoting loop as it stopped.
     pub(super) progress: Progress,
     /// Scratch of the direct coupled Newton point (`coupled.rs`).
     pub(super) cpl: coupled::CoupledWork,
+    /// The scratch, by stage.
+    pub(super) ws: Workspace,
 }
 
 impl Solver {
@@ -282,26 +220,31 @@ impl Solver {
     /// one time step to the next) keeps its ordering, its envelope and their metrics.
     pub(super) fn permute_problem(&mut self, p: &Mlcp, ordering: OrderingKind) {
         let m = p.n();
-        self.pattern_reused = self.pattern_ordering == Some(ordering)
-            && self.perm.len() == m
-            && self.pattern.same_pattern(p.a());
-        if self.pattern_reused {
+        self.ws.permuted.pattern_reused = self.ws.permuted.pattern_ordering == Some(ordering)
+            && self.ws.permuted.perm.len() == m
+            && self.ws.permuted.pattern.same_pattern(p.a());
+        if self.ws.permuted.pattern_reused {
             self.ap.refresh_permuted_values(p.a());
         } else {
-            self.ord_ws.order(p.a(), ordering, &mut self.perm, &mut self.inv);
-            self.ap.permuted_from(p.a(), &self.perm, &self.inv);
-            self.pattern.copy_pattern_from(p.a());
-            self.pattern_ordering = Some(ordering);
+            self.ws.permuted.ord_ws.order(
+                p.a(),
+                ordering,
+                &mut self.ws.permuted.perm,
+                &mut self.ws.permuted.inv,
+            );
+            self.ap.permuted_from(p.a(), &self.ws.permuted.perm, &self.ws.permuted.inv);
+            self.ws.permuted.pattern.copy_pattern_from(p.a());
+            self.ws.permuted.pattern_ordering = Some(ordering);
             // Where each row's diagonal entry is stored (`usize::MAX`: not stored, i.e. zero).
-            self.diag_at.clear();
+            self.ws.permuted.diag_at.clear();
             for i in 0..m {
                 let (cols, _) = self.ap.row(i);
                 let at = cols.binary_search(&i).map_or(usize::MAX, |q| self.ap.row_ptr()[i] + q);
-                self.diag_at.push(at);
+                self.ws.permuted.diag_at.push(at);
             }
             // From the rows' first and last columns: O(m) each, on the permuted copy just built
             // (the same numbers as `*_permuted` on the input, without their O(nnz) gathers).
-            self.metrics = [
+            self.ws.permuted.metrics = [
                 ordering::bandwidth(p.a()),
                 ordering::envelope(p.a()),
                 ordering::bandwidth(&self.ap),
@@ -313,24 +256,25 @@ impl Solver {
             self.stats.envelope_before,
             self.stats.bandwidth_after,
             self.stats.envelope_after,
-        ] = self.metrics;
-        self.stats.pattern_reused = self.pattern_reused;
+        ] = self.ws.permuted.metrics;
+        self.stats.pattern_reused = self.ws.permuted.pattern_reused;
         resize(&mut self.bp, m);
         resize(&mut self.lop, m);
         resize(&mut self.hip, m);
         self.fip.clear();
         self.fip.resize(m, None);
         for new in 0..m {
-            let old = self.perm[new];
+            let old = self.ws.permuted.perm[new];
             self.bp[new] = p.b()[old];
             self.lop[new] = p.lo()[old];
             self.hip[new] = p.hi()[old];
-            self.fip[new] = p.findex()[old].map(|j| self.inv[j]);
+            self.fip[new] = p.findex()[old].map(|j| self.ws.permuted.inv[j]);
         }
-        self.zero_feasible =
+        self.ws.safe.zero_feasible =
             (0..m).all(|i| self.fip[i].is_some() || (self.lop[i] <= 0.0 && self.hip[i] >= 0.0));
         let vals = self.ap.values();
-        self.max_diag = self.diag_at.iter().filter_map(|&k| vals.get(k)).fold(0.0, |a: f64, &d| a.max(d));
+        self.max_diag =
+            self.ws.permuted.diag_at.iter().filter_map(|&k| vals.get(k)).fold(0.0, |a: f64, &d| a.max(d));
         if m == 0 {
             self.max_diag = 1.0;
         }
@@ -344,14 +288,14 @@ impl Solver {
         }
         resize(&mut self.lo_eff, m);
         resize(&mut self.hi_eff, m);
-        resize(&mut self.sigma, m);
+        resize(&mut self.ws.factor.sigma, m);
         self.state.clear();
         self.state.resize(m, IndexState::Free);
         self.tight.clear();
         self.tight.resize(m, false);
-        self.tight_l.clear();
-        self.tight_l.resize(m, false);
-        self.l_valid = false;
+        self.ws.factor.tight_l.clear();
+        self.ws.factor.tight_l.resize(m, false);
+        self.ws.factor.l_valid = false;
         self.non_finite = false;
         self.out_of_time = false;
         self.solve_deadline = self.deadline.or_else(|| {
@@ -362,10 +306,10 @@ impl Solver {
         self.needs_prox = false;
         self.converged_at = None;
         self.prox_shift = 0.0;
-        resize(&mut self.warm_lam, m);
+        resize(&mut self.ws.safe.warm_lam, m);
         resize(&mut self.lam_hat, m);
-        resize(&mut self.frozen, m);
-        self.have_frozen = false;
+        resize(&mut self.ws.safe.frozen, m);
+        self.ws.safe.have_frozen = false;
     }
 
     /// The warm start, permuted: `λ₀` (kept as a candidate answer) and the index set, where a
@@ -374,13 +318,13 @@ impl Solver {
         let m = p.n();
         if let Some(l0) = p.lambda0() {
             for new in 0..m {
-                self.lam[new] = l0[self.perm[new]];
+                self.lam[new] = l0[self.ws.permuted.perm[new]];
             }
-            self.warm_lam.copy_from_slice(&self.lam);
+            self.ws.safe.warm_lam.copy_from_slice(&self.lam);
         }
         if let Some(s0) = p.index0() {
             for new in 0..m {
-                let s = s0[self.perm[new]];
+                let s = s0[self.ws.permuted.perm[new]];
                 let ok = match s {
                     IndexState::Free => true,
                     IndexState::Lower => self.lop[new] > f64::NEG_INFINITY,
@@ -392,8 +336,8 @@ impl Solver {
         }
         // Kept only for the Newton-first attempt, which restores it on failure.
         if self.opts.newton_first {
-            self.state0.clear();
-            self.state0.extend_from_slice(&self.state);
+            self.ws.safe.state0.clear();
+            self.ws.safe.state0.extend_from_slice(&self.state);
         }
     }
 
@@ -421,7 +365,7 @@ impl Solver {
         self.out_state.resize(m, IndexState::Free);
         let mut tight_final = 0;
         for new in 0..m {
-            let old = self.perm[new];
+            let old = self.ws.permuted.perm[new];
             lambda[old] = self.lam[new];
             self.out_state[old] = self.state[new];
             tight_final += self.state[new].is_tight() as usize;
