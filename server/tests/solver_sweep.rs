@@ -6,14 +6,14 @@
 //! mass ratio 1e1–1e9 log-uniform, contact compliance 1e-12–1e-6 log-uniform, μ uniform in 0.3–1.
 //! Each island is solved by `VARIANTS_PER_ISLAND` of the six exact variants, assigned in rotation
 //! (island `k` takes variants `k, k+1, k+2 (mod 6)` of `Variant::EXACT`), so every variant sees
-//! `ISLANDS / 2` islands spread over the whole size range (two tests of alternate blocks of six
-//! islands, which the harness runs on two threads); each of those cold, then from a
+//! `ISLANDS / 2` islands spread over the whole size range (`PARTS` tests, each every `PARTS`-th
+//! block of six islands, which the harness runs on its threads); each of those cold, then from a
 //! perturbed warm start (`generate::perturbed_warm_start`: its own cold answer with every `λ_i`
 //! scaled by `1 + 0.2 u`, `u` uniform in ±1, and a tenth of its index set released to free):
 //! `ISLANDS` solves per variant.
-//! (Three variants per island take 68–97 s of wall time in release on the shared 2-core
-//! development machine, most of it in the dense `full` and `downdate` on large islands and in the
-//! known failures' 1,000 steps; all six would not fit the two minutes this test may take.)
+//! (Measured in release on the 2-core development machine: 67 s of CPU time, 73–98 s of wall
+//! time beside other builds (load 3–5); all six variants on every island would double it, past
+//! the two minutes this test may take.)
 //!
 //! Every solve must converge within 1,000 pivot steps to a relative natural-map residual ≤ 1e-9,
 //! recomputed here (`solver_common`) from `A`, `b`, the bounds and the friction index at the
@@ -32,6 +32,8 @@ use solver_common::natural_map_residual;
 const ISLANDS: usize = 240;
 /// Seed of island 0.
 const SEED0: u64 = 31_000;
+/// Parts of the sweep, one test each (the harness runs them on its threads).
+const PARTS: usize = 4;
 /// Exact variants per island (of six), in rotation.
 const VARIANTS_PER_ISLAND: usize = 3;
 /// Pivot-step cap of every solve.
@@ -135,22 +137,21 @@ fn describe(k: usize, seed: u64, params: &IslandParams, m: usize) -> String {
     )
 }
 
-/// Solves the islands of one half of the sweep (blocks of six consecutive islands, in which every
-/// variant solves three, alternate between the halves); returns their outcomes and, per variant, the
-/// number of solves and the smallest and largest island.
-fn sweep_half(half: usize) -> (Vec<Outcome>, [(usize, usize, usize); 6]) {
+/// The variant index of the `j`-th solve of island `k` (rotation over `Variant::EXACT`).
+fn variant_of(k: usize, j: usize) -> usize {
+    (k + j) % Variant::EXACT.len()
+}
+
+/// Solves the islands of one of `PARTS` parts of the sweep (blocks of six consecutive islands, in
+/// which every variant solves three, dealt to the parts in turn); returns their outcomes.
+fn sweep_part(part: usize) -> Vec<Outcome> {
     let mut outcomes: Vec<Outcome> = Vec::new();
-    let mut per_variant = [(0usize, usize::MAX, 0usize); 6];
-    for k in (0..ISLANDS).filter(|k| (k / Variant::EXACT.len()) % 2 == half) {
+    for k in (0..ISLANDS).filter(|k| (k / Variant::EXACT.len()) % PARTS == part) {
         let seed = SEED0 + k as u64;
         let (params, mut p) = sweep_island(seed);
-        let m = p.n();
-        let island = describe(k, seed, &params, m);
+        let island = describe(k, seed, &params, p.n());
         for j in 0..VARIANTS_PER_ISLAND {
-            let vi = (k + j) % Variant::EXACT.len();
-            let v = Variant::EXACT[vi];
-            let c = &mut per_variant[vi];
-            *c = (c.0 + 2, c.1.min(m), c.2.max(m));
+            let v = Variant::EXACT[variant_of(k, j)];
             p.set_warm_start(None, None).expect("no warm start");
             let (lam, index, status, steps) = solve_once(&p, v);
             outcomes.push(judge(&p, &lam, (status, steps), (seed, v, "cold"), &island));
@@ -160,25 +161,20 @@ fn sweep_half(half: usize) -> (Vec<Outcome>, [(usize, usize, usize); 6]) {
             outcomes.push(judge(&p, &lam, (status, steps), (seed, v, "warm"), &island));
         }
     }
-    (outcomes, per_variant)
+    outcomes
 }
 
-/// The sweep's verdict on one half: no solve outside `KNOWN_FAILURES` fails, none inside converges.
-fn check_half(half: usize) {
-    let (outcomes, per_variant) = sweep_half(half);
-    for (v, (n, lo, hi)) in Variant::EXACT.iter().zip(per_variant) {
-        println!("half {half}, {v}: {n} solves, islands of {lo}–{hi} rows");
-        // Both halves together: at least 200 solves per variant over the size range.
-        assert!(n >= 100 && lo < 100 && hi > 800, "{v}: {n} solves of {lo}–{hi} rows");
-    }
+/// The sweep's verdict on one part: no solve outside `KNOWN_FAILURES` fails, none inside converges.
+fn check_part(part: usize) {
+    let outcomes = sweep_part(part);
     let worst_steps = outcomes.iter().max_by_key(|o| o.steps).expect("solves");
     let worst_res = outcomes.iter().max_by(|a, b| a.residual.total_cmp(&b.residual)).expect("solves");
-    println!("half {half}: {} solves; most steps: {}", outcomes.len(), worst_steps.line);
-    println!("half {half}: largest residual: {}", worst_res.line);
+    println!("part {part}: {} solves; most steps: {}", outcomes.len(), worst_steps.line);
+    println!("part {part}: largest residual: {}", worst_res.line);
     let failed: Vec<&str> = outcomes.iter().filter(|o| !o.ok && !o.known).map(|o| o.line.as_str()).collect();
     let fixed: Vec<&str> = outcomes.iter().filter(|o| o.ok && o.known).map(|o| o.line.as_str()).collect();
     let still = outcomes.iter().filter(|o| !o.ok && o.known).count();
-    println!("half {half}: {still} known failures still fail");
+    println!("part {part}: {still} known failures still fail");
     assert!(
         failed.is_empty(),
         "{} of {} solves failed:\n{}",
@@ -194,13 +190,39 @@ fn check_half(half: usize) {
 }
 
 #[test]
-fn every_exact_variant_solves_the_first_half_of_the_generated_islands_cold_and_warm() {
-    check_half(0);
+fn sweep_part_0() {
+    check_part(0);
 }
 
 #[test]
-fn every_exact_variant_solves_the_second_half_of_the_generated_islands_cold_and_warm() {
-    check_half(1);
+fn sweep_part_1() {
+    check_part(1);
+}
+
+#[test]
+fn sweep_part_2() {
+    check_part(2);
+}
+
+#[test]
+fn sweep_part_3() {
+    check_part(3);
+}
+
+#[test]
+fn every_variant_makes_200_solves_across_the_size_range() {
+    let mut per_variant = [(0usize, usize::MAX, 0usize); 6];
+    for k in 0..ISLANDS {
+        let m = sweep_island(SEED0 + k as u64).1.n();
+        for j in 0..VARIANTS_PER_ISLAND {
+            let c = &mut per_variant[variant_of(k, j)];
+            *c = (c.0 + 2, c.1.min(m), c.2.max(m));
+        }
+    }
+    for (v, (n, lo, hi)) in Variant::EXACT.iter().zip(per_variant) {
+        println!("{v}: {n} solves, islands of {lo}–{hi} rows");
+        assert!(n >= 200 && lo < 60 && hi > 940, "{v}: {n} solves of {lo}–{hi} rows");
+    }
 }
 
 #[test]
@@ -209,6 +231,6 @@ fn every_known_failure_is_a_solve_of_the_sweep() {
         let k = (seed - SEED0) as usize;
         assert!(k < ISLANDS && ["cold", "warm"].contains(&start), "{seed} {v} {start}");
         let vi = Variant::EXACT.iter().position(|&x| x == v).expect("exact variant");
-        assert!((0..VARIANTS_PER_ISLAND).any(|j| (k + j) % 6 == vi), "{seed}: {v} does not solve it");
+        assert!((0..VARIANTS_PER_ISLAND).any(|j| variant_of(k, j) == vi), "{seed}: {v} does not solve it");
     }
 }
