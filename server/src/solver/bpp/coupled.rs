@@ -26,7 +26,7 @@ use std::time::Instant;
 use super::super::envelope_lu::EnvelopeLu;
 use super::super::problem::reserve_touched;
 use super::super::{IndexState, Variant};
-use super::{FactorIn, Solver, resize, us};
+use super::solver::{FactorIn, Solver, resize, us};
 
 impl Solver {
     /// Exact semismooth-Newton point for the current index set when friction rows are tight

@@ -5,7 +5,7 @@
 use std::time::Instant;
 
 use super::super::{IndexState, Variant, dense, natural_residual};
-use super::{FactorIn, Solver, resize, size_to, us};
+use super::solver::{FactorIn, Solver, resize, size_to, us};
 
 /// The least a deletion's rotation of one column costs in the `auto` cost model, in stored
 /// entries: each rotated column first takes a square root and four divisions, a chain through

@@ -38,7 +38,7 @@
 
 use super::super::IndexState;
 use super::super::envelope_lu::LuError;
-use super::{Solver, resize};
+use super::solver::{Solver, resize};
 
 /// Iterations without halving the best residual after which the method gives up.
 const IPM_PATIENCE: usize = 8;

@@ -97,11 +97,7 @@ mod solver;
 mod workspace;
 
 pub use options::{Fallback, POLISH_SWEEPS, SolverOptions};
-use outer::OUTER_MEMORY;
-use pivot::Progress;
 pub use solver::Solver;
-use solver::{FactorIn, resize, size_to, us};
-use workspace::Workspace;
 
 #[cfg(doc)]
 use super::Variant;

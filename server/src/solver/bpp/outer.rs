@@ -5,7 +5,7 @@
 use super::super::{Variant, effective_bounds, natural_residual};
 use super::pivot::{Next, Progress};
 use super::safeguard::Start;
-use super::{Solver, resize};
+use super::solver::{Solver, resize};
 
 /// Outer updates without a 10 % improvement of the best residual before the Newton fallback;
 /// with the safeguard after each update (each update then costs more steps) 4 measured best.

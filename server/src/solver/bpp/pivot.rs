@@ -3,8 +3,9 @@
 //! (module docs of `bpp`, "One pivot step", "Safeguard").
 
 use super::super::{IndexState, Variant, natural_residual};
+use super::options::Fallback;
 use super::safeguard::Start;
-use super::{Fallback, Solver};
+use super::solver::Solver;
 
 /// Pivot steps the semismooth Newton method may take first on a warm-started solve.
 const NEWTON_FIRST_BUDGET: usize = 12;

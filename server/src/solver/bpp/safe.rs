@@ -19,7 +19,7 @@
 
 use super::super::pgs::{inverse_diagonal, pgs_sweep};
 use super::super::{effective_bounds, natural_residual};
-use super::Solver;
+use super::solver::Solver;
 
 impl Solver {
     /// Makes `λ` (permuted order) feasible and of non-positive merit (module docs); leaves the

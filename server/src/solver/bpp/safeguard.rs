@@ -4,7 +4,7 @@
 use std::time::Instant;
 
 use super::super::{IndexState, Variant, effective_bounds, natural_residual};
-use super::{Solver, resize, us};
+use super::solver::{Solver, resize, us};
 
 impl Solver {
     /// Safeguard of the block pivoting for *fixed* bounds: a primal feasible active-set method on

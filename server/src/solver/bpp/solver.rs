@@ -9,7 +9,11 @@ use super::super::problem::reserve_touched;
 use super::super::{
     IndexState, Mlcp, OrderingKind, SolveStats, SolveStatus, SymCsr, Variant, natural_residual,
 };
-use super::{OUTER_MEMORY, Progress, SolverOptions, Workspace, coupled, ipm};
+use super::options::SolverOptions;
+use super::outer::OUTER_MEMORY;
+use super::pivot::Progress;
+use super::workspace::Workspace;
+use super::{coupled, ipm};
 
 /// Which buffer holds the factor of the current index set.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]

@@ -4,7 +4,8 @@
 use super::super::envelope::Envelope;
 use super::super::ordering::OrderingWorkspace;
 use super::super::{IndexState, OrderingKind, SymCsr};
-use super::{FactorIn, Progress};
+use super::pivot::Progress;
+use super::solver::FactorIn;
 
 /// The scratch of a [`Solver`](super::Solver), by stage.
 #[derive(Debug, Default)]
