@@ -23,10 +23,10 @@
 
 use std::time::Instant;
 
-use super::super::envelope_lu::EnvelopeLu;
 use super::super::problem::reserve_touched;
 use super::super::{IndexState, Variant};
 use super::solver::{FactorIn, Solver, resize, us};
+use super::workspace::CoupledWork;
 
 impl Solver {
     /// Exact semismooth-Newton point for the current index set when friction rows are tight
@@ -356,19 +356,4 @@ impl CoupledWork {
         reserve_touched(&mut self.vals, m, 0.0);
         reserve_touched(&mut self.start, m, 0.0);
     }
-}
-
-/// Scratch of the direct coupled Newton point, sized by the island and reused.
-#[derive(Debug, Default)]
-pub(super) struct CoupledWork {
-    lu: EnvelopeLu,
-    /// Coupled tight rows: their normal impulse's index and `−μ^±`.
-    rows: Vec<Option<usize>>,
-    vals: Vec<f64>,
-    /// `λ` before the direct point (restored when it is rejected).
-    start: Vec<f64>,
-    /// Recent GMRES iterations per coupled point, and the recent share of rejected direct points
-    /// (exponential averages over this solver's solves; the cost model's memory).
-    gmres_iters: f64,
-    lu_rejects: f64,
 }

@@ -39,6 +39,7 @@
 use super::super::IndexState;
 use super::super::envelope_lu::LuError;
 use super::solver::{Solver, resize};
+use super::workspace::RowKind;
 
 /// Iterations without halving the best residual after which the method gives up.
 const IPM_PATIENCE: usize = 8;
@@ -57,20 +58,6 @@ const CROSSOVER_TRIAL: usize = 30;
 const IPM_STARTS: [(usize, f64); 2] = [(90, 0.1), (95, 0.3)];
 /// Fraction of the step to the boundary.
 const TO_BOUNDARY: f64 = 0.995;
-
-/// The bounds a row takes part in.
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
-pub(super) enum RowKind {
-    /// No finite bound.
-    #[default]
-    Free,
-    /// `lo ≤ λ` and/or `λ ≤ hi` (plain rows).
-    Box { lower: bool, upper: bool },
-    /// `lo λ_n ≤ λ ≤ hi λ_n` for the normal row `n`.
-    Friction(usize),
-    /// `lo = hi`: held at that value.
-    Fixed(f64),
-}
 
 impl Solver {
     /// The interior point method, then block pivoting from the index set it identified:
@@ -465,31 +452,4 @@ fn side_step(tau: f64, s: f64, z: f64, ds: f64) -> (f64, f64) {
 /// Largest `t ≥ 0` with `x + t dx ≥ 0` (∞ when `dx ≥ 0`).
 fn step_to_zero(x: f64, dx: f64) -> f64 {
     if dx < 0.0 { -x / dx } else { f64::INFINITY }
-}
-
-/// Scratch of the interior point method, sized by the island and reused.
-#[derive(Debug, Default)]
-pub(super) struct IpmWork {
-    kind: Vec<RowKind>,
-    env: super::super::envelope::Envelope,
-    lu: super::super::envelope_lu::EnvelopeLu,
-    zl: Vec<f64>,
-    zu: Vec<f64>,
-    sl: Vec<f64>,
-    su: Vec<f64>,
-    d: Vec<f64>,
-    cv: Vec<f64>,
-    cpl: Vec<Option<usize>>,
-    dlam: Vec<f64>,
-    dsl: Vec<f64>,
-    dsu: Vec<f64>,
-    dzl: Vec<f64>,
-    dzu: Vec<f64>,
-    aff_l: Vec<f64>,
-    aff_u: Vec<f64>,
-    ratio: Vec<f64>,
-    /// Smallest relative residual of this run's iterates.
-    best: f64,
-    /// The start of this run, one of `IPM_STARTS`.
-    start: (usize, f64),
 }

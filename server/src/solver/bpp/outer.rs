@@ -3,9 +3,10 @@
 //! Newton fallback when the outer iteration stalls (module docs of `bpp`, "Friction coupling").
 
 use super::super::{Variant, effective_bounds, natural_residual};
-use super::pivot::{Next, Progress};
+use super::pivot::Next;
 use super::safeguard::Start;
 use super::solver::{Solver, resize};
+use super::workspace::{OUTER_MEMORY, Progress};
 
 /// Outer updates without a 10 % improvement of the best residual before the Newton fallback;
 /// with the safeguard after each update (each update then costs more steps) 4 measured best.
@@ -14,9 +15,6 @@ const OUTER_STALL_SAFEGUARDED: usize = 4;
 
 /// Pivot steps one semismooth-Newton fallback may take before the outer iteration resumes.
 const NEWTON_BUDGET: usize = 60;
-
-/// Outer residuals remembered by the non-monotone acceptance of coupled Newton points.
-pub(super) const OUTER_MEMORY: usize = 4;
 
 impl Solver {
     /// The boxed LCP with the frozen bounds is solved exactly (residual `(res, res_rel)` against

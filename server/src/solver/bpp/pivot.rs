@@ -6,6 +6,7 @@ use super::super::{IndexState, Variant, natural_residual};
 use super::options::Fallback;
 use super::safeguard::Start;
 use super::solver::Solver;
+use super::workspace::Progress;
 
 /// Pivot steps the semismooth Newton method may take first on a warm-started solve.
 const NEWTON_FIRST_BUDGET: usize = 12;
@@ -205,32 +206,6 @@ impl Solver {
         };
         self.state[i] = new;
         self.tight[i] = new.is_tight();
-    }
-}
-
-/// Progress of the block pivoting loop: the fewest infeasible variables since the last reset and
-/// the steps without a decrease; the best outer residual and the outer updates without a 10 %
-/// improvement of it.
-#[derive(Debug, Clone, Copy)]
-pub(super) struct Progress {
-    pub(super) best_ninf: usize,
-    pub(super) no_progress: usize,
-    pub(super) outer_best: f64,
-    pub(super) outer_stall: usize,
-    /// The safeguarded outer iteration and the Newton fallback both stalled: block pivots after
-    /// the remaining outer updates.
-    pub(super) block_pivots: bool,
-}
-
-impl Default for Progress {
-    fn default() -> Self {
-        Progress {
-            best_ninf: usize::MAX,
-            no_progress: 0,
-            outer_best: f64::INFINITY,
-            outer_stall: 0,
-            block_pivots: false,
-        }
     }
 }
 

@@ -10,19 +10,8 @@ use super::super::{
     IndexState, Mlcp, OrderingKind, SolveStats, SolveStatus, SymCsr, Variant, natural_residual,
 };
 use super::options::SolverOptions;
-use super::outer::OUTER_MEMORY;
-use super::pivot::Progress;
-use super::workspace::Workspace;
-use super::{coupled, ipm};
-
-/// Which buffer holds the factor of the current index set.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-pub(super) enum FactorIn {
-    #[default]
-    L0,
-    L,
-    Compact,
-}
+pub(super) use super::workspace::FactorIn;
+use super::workspace::{CoupledWork, IpmWork, OUTER_MEMORY, Progress, Workspace};
 
 /// A reusable solver: buffers are sized by the first solve of a given size and reused afterwards
 /// (no heap allocation per solve once warm). The large ones — the permuted copy of `A` and its
@@ -74,14 +63,14 @@ pub struct Solver {
     /// The deadline of the current solve: `deadline`, or its own budget.
     pub(super) solve_deadline: Option<Instant>,
     /// Scratch of the interior point method (`ipm.rs`).
-    pub(super) ipm: ipm::IpmWork,
+    pub(super) ipm: IpmWork,
     /// Pivot steps after which this solve switches to the interior point method (`usize::MAX`
     /// once it has, or never).
     pub(super) ipm_at: usize,
     /// The progress of the last pivoting loop as it stopped.
     pub(super) progress: Progress,
     /// Scratch of the direct coupled Newton point (`coupled.rs`).
-    pub(super) cpl: coupled::CoupledWork,
+    pub(super) cpl: CoupledWork,
     /// The scratch, by stage.
     pub(super) ws: Workspace,
 }

@@ -1,11 +1,13 @@
 //! The solver's scratch, grouped by the stage that owns it (as faer pairs each kernel with its
-//! scratch): a solve sizes each part once and reuses it, so a warm solve allocates nothing.
+//! scratch): a solve sizes each part once and reuses it, so a warm solve allocates nothing. The
+//! data types of the stages' state live here too (the pivoting loop's `Progress`, the interior
+//! point and coupled-point scratch, `FactorIn`), their methods beside their stages, so that every
+//! stage file imports this one and none imports another's.
 
 use super::super::envelope::Envelope;
+use super::super::envelope_lu::EnvelopeLu;
 use super::super::ordering::OrderingWorkspace;
 use super::super::{IndexState, OrderingKind, SymCsr};
-use super::pivot::Progress;
-use super::solver::FactorIn;
 
 /// The scratch of a [`Solver`](super::Solver), by stage.
 #[derive(Debug, Default)]
@@ -120,4 +122,98 @@ pub(super) struct SavedPoint {
     pub(super) hi: Vec<f64>,
     pub(super) best_res: f64,
     pub(super) progress: Progress,
+}
+
+/// Which buffer holds the factor of the current index set.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub(super) enum FactorIn {
+    #[default]
+    L0,
+    L,
+    Compact,
+}
+
+/// Progress of the block pivoting loop: the fewest infeasible variables since the last reset and
+/// the steps without a decrease; the best outer residual and the outer updates without a 10 %
+/// improvement of it.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct Progress {
+    pub(super) best_ninf: usize,
+    pub(super) no_progress: usize,
+    pub(super) outer_best: f64,
+    pub(super) outer_stall: usize,
+    /// The safeguarded outer iteration and the Newton fallback both stalled: block pivots after
+    /// the remaining outer updates.
+    pub(super) block_pivots: bool,
+}
+
+impl Default for Progress {
+    fn default() -> Self {
+        Progress {
+            best_ninf: usize::MAX,
+            no_progress: 0,
+            outer_best: f64::INFINITY,
+            outer_stall: 0,
+            block_pivots: false,
+        }
+    }
+}
+
+/// Outer residuals remembered by the non-monotone acceptance of coupled Newton points.
+pub(super) const OUTER_MEMORY: usize = 4;
+
+/// Scratch of the direct coupled Newton point, sized by the island and reused.
+#[derive(Debug, Default)]
+pub(super) struct CoupledWork {
+    pub(super) lu: EnvelopeLu,
+    /// Coupled tight rows: their normal impulse's index and `−μ^±`.
+    pub(super) rows: Vec<Option<usize>>,
+    pub(super) vals: Vec<f64>,
+    /// `λ` before the direct point (restored when it is rejected).
+    pub(super) start: Vec<f64>,
+    /// Recent GMRES iterations per coupled point, and the recent share of rejected direct points
+    /// (exponential averages over this solver's solves; the cost model's memory).
+    pub(super) gmres_iters: f64,
+    pub(super) lu_rejects: f64,
+}
+
+/// Scratch of the interior point method, sized by the island and reused.
+#[derive(Debug, Default)]
+pub(super) struct IpmWork {
+    pub(super) kind: Vec<RowKind>,
+    pub(super) env: Envelope,
+    pub(super) lu: EnvelopeLu,
+    pub(super) zl: Vec<f64>,
+    pub(super) zu: Vec<f64>,
+    pub(super) sl: Vec<f64>,
+    pub(super) su: Vec<f64>,
+    pub(super) d: Vec<f64>,
+    pub(super) cv: Vec<f64>,
+    pub(super) cpl: Vec<Option<usize>>,
+    pub(super) dlam: Vec<f64>,
+    pub(super) dsl: Vec<f64>,
+    pub(super) dsu: Vec<f64>,
+    pub(super) dzl: Vec<f64>,
+    pub(super) dzu: Vec<f64>,
+    pub(super) aff_l: Vec<f64>,
+    pub(super) aff_u: Vec<f64>,
+    pub(super) ratio: Vec<f64>,
+    /// Smallest relative residual of this run's iterates.
+    pub(super) best: f64,
+    /// The start of this run, one of `IPM_STARTS`.
+    pub(super) start: (usize, f64),
+}
+
+/// The bounds a row takes part in.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub(super) enum RowKind {
+    /// No finite bound.
+    #[default]
+    Free,
+    /// `lo ≤ λ` and/or `λ ≤ hi` (plain rows).
+    Box { lower: bool, upper: bool },
+    /// `lo λ_n ≤ λ ≤ hi λ_n` for the normal row `n`.
+    Friction(usize),
+    /// `lo = hi`: held at that value.
+    Fixed(f64),
 }
