@@ -101,6 +101,10 @@ enum Command {
         /// repository root).
         #[arg(long)]
         data: Option<PathBuf>,
+        /// Run only the generated-island sweep over this many islands (every exact variant in
+        /// rotation, cold and warm; `sweep.json` in the output directory).
+        #[arg(long, value_parser = clap::value_parser!(u32).range(1..=1_000_000))]
+        sweep: Option<u32>,
     },
     /// The speed/accuracy report: every paper scene with every variant, the paper's Tables 2–4 and
     /// Fig. 3, 5/6, 7 beside its numbers, residual against time for PGS and block pivoting, warm
@@ -151,9 +155,12 @@ fn main() -> ExitCode {
             Ok(())
         }
         Some(Command::Pattern { file, out, ordering }) => cli::pattern::pattern(&file, &out, ordering),
-        Some(Command::BenchSolver { out, quick, data }) => {
+        Some(Command::BenchSolver { out, quick, data, sweep }) => {
             let cfg = cli::bench::BenchConfig::new(out, quick, data);
-            cli::bench::run(&cfg).map(|_| ())
+            match sweep {
+                Some(n) => cli::bench::sweep::run(n as usize, &cfg.out).map(|_| ()),
+                None => cli::bench::run(&cfg).map(|_| ()),
+            }
         }
         Some(Command::Report { out, quick }) => {
             let cfg = cli::report::ReportConfig {

@@ -27,16 +27,8 @@
 //! over the rows does four multiply–adds per two loads and two stores of the targets instead of
 //! one per load and store; then column `j + 1` takes its update from column `j`. Every entry
 //! still takes its updates in the order of `k`, with the same zero multipliers skipped: the
-//! factor is the column-by-column one to the bit (unit test), so no trajectory changes. Measured
-//! (session of 2026-12-02 night, release, the factor alone against the column-by-column loop in
-//! one binary, alternated, 2,000 repeats): the crane's 341- and 376-row islands (two dense
-//! 68-row blocks, 139k–145k multiply–adds) 0.81–0.88×, forklift, winch and forwarder corpus files
-//! 0.80–0.93×. Pairing only the sources gave 0.86–0.90× in the same harness but nothing
-//! measurable compiled into the library; pairing only the targets 0.81–0.92×. Instructions
-//! (callgrind, deterministic where this VM's timings swing ±25 %), with `A`'s rows scattered from
-//! the diagonal on and the factor buffers no longer zeroed per solve (`bpp::size_to`), all island
-//! solves of each scene's first 2–3 s, `auto`: crane 231M → 181M, forklift 281M → 225M, winch
-//! 522M → 472M, forwarder 64M → 48M, offshore 307M → 228M, vehicle 880M → 623M (−10…−29 %).
+//! factor is the column-by-column one to the bit (unit test), so no trajectory changes (its speed,
+//! measured, in `docs/notes/solver.md`).
 //!
 //! **Solves (Alg. 3 CHOLSOLVE).** Forward `L y = r` as column axpys over `j+1 ..= s_j`, backward
 //! `Lᵀ x = y` as dot products over the same ranges. Identity rows of tight indices pass a zero

@@ -11,7 +11,7 @@
 //! | `dense.rs` | dense left-looking Cholesky, row/column deletion, solves (Alg. 1, 2) |
 //! | `envelope.rs` | envelope (skyline) Cholesky, deletion on the skyline, solves (Alg. 3) |
 //! | `envelope_lu.rs` | LU without pivoting on the same envelope (the interior point method's Newton matrix) |
-//! | `bpp/` | block principal pivoting (eq. 4–6): `mod.rs` the driver, `factor.rs` the factor strategies, `safeguard.rs` the active-set and proximal safeguards, `coupled.rs` friction coupling, `safe.rs` safe returned iterates |
+//! | `bpp/` | block principal pivoting (eq. 4–6): `options.rs`, `solver.rs` the entry, `pivot.rs` the pivoting loop, `outer.rs` the outer friction loop, `factor.rs` the factor strategies, `safeguard.rs` the active-set and proximal safeguards, `coupled.rs` friction coupling, `ipm.rs` the interior point switch, `safe.rs` safe returned iterates |
 //! | `pgs.rs` | projected Gauss–Seidel baseline |
 //! | `generate.rs` | generated contact-like test problems (tests and `bench-solver`) |
 //! | `reference.rs` | brute-force enumeration of index sets (test reference for small problems) |

@@ -33,6 +33,7 @@
 //! | `corpus.rs` | stage 5: the corpus of real islands |
 //! | `report.rs` | the summary, `bench.md` and the `bench.json` document |
 //! | `plots.rs` | the SVG plots |
+//! | `sweep.rs` | `--sweep N`, alone: the generated-island sweep at scale (`sweep.json`) |
 
 mod corpus;
 mod kernels;
@@ -40,6 +41,7 @@ mod plan;
 mod plots;
 mod problems;
 mod report;
+pub mod sweep;
 mod timing;
 
 use std::path::{Path, PathBuf};

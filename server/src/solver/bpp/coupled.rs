@@ -19,33 +19,14 @@
 //! points — and only with the envelope kernels, whose envelope of `A` it factors on (the dense
 //! kernels of small islands keep GMRES).
 //!
-//! **Measured** (release, `auto`, cap 35, session of 2026-12-03 afternoon). The direct point's
-//! free-row residual on the winch's 12 hardest solves at contact compliance 1e-10 is 5e-15–1e-14
-//! (from 1e-2…9e-1) where GMRES stops at 5e-12–2e-9; with the LU forced, 7 of the 12 points of
-//! the hardest capped one are rejected (6e-5…4e2: the near-singular 2×2 blocks above). Solver time
-//! in-process, each problem solved in turn by a GMRES-only solver and by the default, medians
-//! of 31–81 alternated repeats (a GMRES-only pair of solvers reads 0.995–1.007): the islands
-//! dumped every 7th step of a 20 s run (172 problems each, their simulation warm starts) — winch
-//! 0.82–0.84×, winch at contact compliance 1e-10 0.84–0.87×; every 11th step of the forklift,
-//! vehicle, forwarder and offshore runs 0.997–1.003×; the corpus (the hardest solves, where the
-//! points are few or rejected) 1.001×. (A first cost model that bounded GMRES by `coupled + 1`
-//! iterations chose the LU where GMRES needs 3–7: corpus 1.055×.) The eight 20 s scene runs keep
-//! every capped count and largest residual (the winch at 1e-10 moves its mean pivot steps 6.89 →
-//! 6.90: the exact points round differently). On the corpus (`solver_corpus.rs`), warm and cold
-//! at cap 100, both ways converge on the same 52 of 60 solves and reach the same impulses on all
-//! 22 warm ones. The capped solves, whose longest-solve target this was meant to help, gain
-//! nothing: their points are the rejected ones. Nor does GMRES preconditioned by a rejected
-//! point's LU rescue them: its Arnoldi estimate falls to 1e-13 after one vector while the true
-//! residual stays at 0.1–4e2 (the LU's answer carries a huge component along a near-null
-//! direction, which the product with the coupled matrix cancels in rounding) — measured on the
-//! winch's three capped files at 1e-10, and dropped.
+//! What the direct point gains and where it is rejected, measured: `docs/notes/solver.md`.
 
 use std::time::Instant;
 
-use super::super::envelope_lu::EnvelopeLu;
 use super::super::problem::reserve_touched;
 use super::super::{IndexState, Variant};
-use super::{FactorIn, Solver, resize, us};
+use super::solver::{FactorIn, Solver, resize, us};
+use super::workspace::CoupledWork;
 
 impl Solver {
     /// Exact semismooth-Newton point for the current index set when friction rows are tight
@@ -69,12 +50,12 @@ impl Solver {
         }
         let kry_before = self.stats.krylov_iterations;
         let restart = GMRES_RESTART.min(m);
-        resize(&mut self.kry_v, (restart + 1) * m);
-        resize(&mut self.kry_h, (restart + 1) * restart);
-        resize(&mut self.kry_g, restart + 1);
-        resize(&mut self.kry_cs, restart);
-        resize(&mut self.kry_sn, restart);
-        resize(&mut self.kry_z, m);
+        resize(&mut self.ws.krylov.v, (restart + 1) * m);
+        resize(&mut self.ws.krylov.h, (restart + 1) * restart);
+        resize(&mut self.ws.krylov.g, restart + 1);
+        resize(&mut self.ws.krylov.cs, restart);
+        resize(&mut self.ws.krylov.sn, restart);
+        resize(&mut self.ws.krylov.z, m);
         // Coupled rows follow the current normal impulses.
         self.apply_coupling();
         self.compute_w();
@@ -82,18 +63,18 @@ impl Solver {
         for cycle in 0..GMRES_CYCLES {
             // r = −w_F (residual of the free rows), zero on T.
             for i in 0..m {
-                self.kry_v[i] = if self.tight[i] { 0.0 } else { -self.w[i] };
+                self.ws.krylov.v[i] = if self.tight[i] { 0.0 } else { -self.w[i] };
             }
-            let beta = dot(&self.kry_v[..m], &self.kry_v[..m]).sqrt();
+            let beta = dot(&self.ws.krylov.v[..m], &self.ws.krylov.v[..m]).sqrt();
             if cycle == 0 {
                 beta0 = beta;
             }
             if beta == 0.0 || beta <= GMRES_TOL * beta0 {
                 break;
             }
-            self.kry_v[..m].iter_mut().for_each(|x| *x /= beta);
-            self.kry_g.fill(0.0);
-            self.kry_g[0] = beta;
+            self.ws.krylov.v[..m].iter_mut().for_each(|x| *x /= beta);
+            self.ws.krylov.g.fill(0.0);
+            self.ws.krylov.g[0] = beta;
             let k_used = self.gmres_arnoldi(which, restart, beta0);
             self.gmres_update(which, k_used, restart);
             self.apply_coupling();
@@ -126,43 +107,44 @@ impl Solver {
                 break;
             }
             // z = P⁻¹ v_k, then v_{k+1} = B z.
-            self.rhs.copy_from_slice(&self.kry_v[k * m..(k + 1) * m]);
+            self.rhs.copy_from_slice(&self.ws.krylov.v[k * m..(k + 1) * m]);
             self.solve_with(which);
-            self.kry_z.copy_from_slice(&self.rhs);
+            self.ws.krylov.z.copy_from_slice(&self.rhs);
             self.apply_b();
             // Modified Gram–Schmidt.
             for q in 0..=k {
-                let h = dot(&self.rhs, &self.kry_v[q * m..(q + 1) * m]);
-                self.kry_h[q * restart + k] = h;
-                for (x, &v) in self.rhs.iter_mut().zip(&self.kry_v[q * m..(q + 1) * m]) {
+                let h = dot(&self.rhs, &self.ws.krylov.v[q * m..(q + 1) * m]);
+                self.ws.krylov.h[q * restart + k] = h;
+                for (x, &v) in self.rhs.iter_mut().zip(&self.ws.krylov.v[q * m..(q + 1) * m]) {
                     *x -= h * v;
                 }
             }
             let hn = dot(&self.rhs, &self.rhs).sqrt();
-            self.kry_h[(k + 1) * restart + k] = hn;
+            self.ws.krylov.h[(k + 1) * restart + k] = hn;
             if hn > 0.0 {
-                for (dst, &x) in self.kry_v[(k + 1) * m..(k + 2) * m].iter_mut().zip(&self.rhs) {
+                for (dst, &x) in self.ws.krylov.v[(k + 1) * m..(k + 2) * m].iter_mut().zip(&self.rhs) {
                     *dst = x / hn;
                 }
             }
             // Givens rotations on column k.
             for q in 0..k {
-                let (a, b) = (self.kry_h[q * restart + k], self.kry_h[(q + 1) * restart + k]);
-                self.kry_h[q * restart + k] = self.kry_cs[q] * a + self.kry_sn[q] * b;
-                self.kry_h[(q + 1) * restart + k] = -self.kry_sn[q] * a + self.kry_cs[q] * b;
+                let (a, b) = (self.ws.krylov.h[q * restart + k], self.ws.krylov.h[(q + 1) * restart + k]);
+                self.ws.krylov.h[q * restart + k] = self.ws.krylov.cs[q] * a + self.ws.krylov.sn[q] * b;
+                self.ws.krylov.h[(q + 1) * restart + k] =
+                    -self.ws.krylov.sn[q] * a + self.ws.krylov.cs[q] * b;
             }
-            let (a, b) = (self.kry_h[k * restart + k], self.kry_h[(k + 1) * restart + k]);
+            let (a, b) = (self.ws.krylov.h[k * restart + k], self.ws.krylov.h[(k + 1) * restart + k]);
             let r = a.hypot(b);
             let (c, sn) = if r == 0.0 { (1.0, 0.0) } else { (a / r, b / r) };
-            self.kry_cs[k] = c;
-            self.kry_sn[k] = sn;
-            self.kry_h[k * restart + k] = r;
-            self.kry_h[(k + 1) * restart + k] = 0.0;
-            self.kry_g[k + 1] = -sn * self.kry_g[k];
-            self.kry_g[k] *= c;
+            self.ws.krylov.cs[k] = c;
+            self.ws.krylov.sn[k] = sn;
+            self.ws.krylov.h[k * restart + k] = r;
+            self.ws.krylov.h[(k + 1) * restart + k] = 0.0;
+            self.ws.krylov.g[k + 1] = -sn * self.ws.krylov.g[k];
+            self.ws.krylov.g[k] *= c;
             k_used = k + 1;
             self.stats.krylov_iterations += 1;
-            if self.kry_g[k + 1].abs() <= GMRES_TOL * beta0 || hn == 0.0 {
+            if self.ws.krylov.g[k + 1].abs() <= GMRES_TOL * beta0 || hn == 0.0 {
                 break;
             }
         }
@@ -173,16 +155,16 @@ impl Solver {
     fn gmres_update(&mut self, which: FactorIn, k_used: usize, restart: usize) {
         let m = self.ap.n();
         for q in (0..k_used).rev() {
-            let mut acc = self.kry_g[q];
+            let mut acc = self.ws.krylov.g[q];
             for p in q + 1..k_used {
-                acc -= self.kry_h[q * restart + p] * self.kry_g[p];
+                acc -= self.ws.krylov.h[q * restart + p] * self.ws.krylov.g[p];
             }
-            self.kry_g[q] = acc / self.kry_h[q * restart + q];
+            self.ws.krylov.g[q] = acc / self.ws.krylov.h[q * restart + q];
         }
         self.rhs.fill(0.0);
         for q in 0..k_used {
-            let y = self.kry_g[q];
-            for (x, &v) in self.rhs.iter_mut().zip(&self.kry_v[q * m..(q + 1) * m]) {
+            let y = self.ws.krylov.g[q];
+            for (x, &v) in self.rhs.iter_mut().zip(&self.ws.krylov.v[q * m..(q + 1) * m]) {
                 *x += y * v;
             }
         }
@@ -217,7 +199,7 @@ impl Solver {
                 // with the factor at hand, a product with `A` and the orthogonalisation. The LU:
                 // twice the multiply–adds of the envelope Cholesky and two solves, wasted when the
                 // point is rejected (as often as recent attempts were), GMRES then running anyway.
-                let env = &self.env;
+                let env = &self.ws.factor.env;
                 let iters = self.cpl.gmres_iters.min((coupled + 1) as f64).max(1.0);
                 let per_iter = 2.0 * env.len() as f64 + self.ap.nnz() as f64 + m as f64 * iters;
                 let gmres = iters * per_iter;
@@ -243,7 +225,7 @@ impl Solver {
         }
         let t = Instant::now();
         let w = &mut self.cpl;
-        let factored = w.lu.factor_coupled(&self.env, &self.ap, &self.tight, &w.rows, &w.vals);
+        let factored = w.lu.factor_coupled(&self.ws.factor.env, &self.ap, &self.tight, &w.rows, &w.vals);
         self.stats.factor_us += us(t);
         if factored.is_err() {
             self.reject_direct();
@@ -257,7 +239,7 @@ impl Solver {
             for i in 0..m {
                 self.rhs[i] = if self.tight[i] { 0.0 } else { -self.w[i] };
             }
-            self.cpl.lu.solve(&self.env, &mut self.rhs);
+            self.cpl.lu.solve(&self.ws.factor.env, &mut self.rhs);
             for i in 0..m {
                 if !self.tight[i] || self.cpl.rows[i].is_some() {
                     self.lam[i] += self.rhs[i];
@@ -333,15 +315,15 @@ impl Solver {
         let m = self.ap.n();
         for i in 0..m {
             if self.tight[i] {
-                self.kry_z[i] = 0.0;
+                self.ws.krylov.z[i] = 0.0;
             }
         }
         for i in 0..m {
             if let Some((j, coef)) = self.coupled_row(i) {
-                self.kry_z[i] = coef * self.kry_z[j];
+                self.ws.krylov.z[i] = coef * self.ws.krylov.z[j];
             }
         }
-        self.ap.mul_vec(&self.kry_z, &mut self.rhs);
+        self.ap.mul_vec(&self.ws.krylov.z, &mut self.rhs);
         for i in 0..m {
             if self.tight[i] {
                 self.rhs[i] = 0.0;
@@ -374,19 +356,4 @@ impl CoupledWork {
         reserve_touched(&mut self.vals, m, 0.0);
         reserve_touched(&mut self.start, m, 0.0);
     }
-}
-
-/// Scratch of the direct coupled Newton point, sized by the island and reused.
-#[derive(Debug, Default)]
-pub(super) struct CoupledWork {
-    lu: EnvelopeLu,
-    /// Coupled tight rows: their normal impulse's index and `−μ^±`.
-    rows: Vec<Option<usize>>,
-    vals: Vec<f64>,
-    /// `λ` before the direct point (restored when it is rejected).
-    start: Vec<f64>,
-    /// Recent GMRES iterations per coupled point, and the recent share of rejected direct points
-    /// (exponential averages over this solver's solves; the cost model's memory).
-    gmres_iters: f64,
-    lu_rejects: f64,
 }

@@ -5,7 +5,7 @@
 use std::time::Instant;
 
 use super::super::{IndexState, Variant, dense, natural_residual};
-use super::{FactorIn, Solver, resize, size_to, us};
+use super::solver::{FactorIn, Solver, resize, size_to, us};
 
 /// The least a deletion's rotation of one column costs in the `auto` cost model, in stored
 /// entries: each rotated column first takes a square root and four divisions, a chain through
@@ -28,26 +28,27 @@ impl Solver {
                 self.stats.factor_entries = m * (m + 1) / 2;
             }
             Variant::Downdate => {
-                resize(&mut self.dense_l0, m * m);
-                self.ap.to_dense(&mut self.dense_l0);
-                self.stats.regularized += dense::cholesky_in_place(&mut self.dense_l0, m, self.max_diag);
-                resize(&mut self.dense_l, m * m);
+                resize(&mut self.ws.factor.dense_l0, m * m);
+                self.ap.to_dense(&mut self.ws.factor.dense_l0);
+                self.stats.regularized +=
+                    dense::cholesky_in_place(&mut self.ws.factor.dense_l0, m, self.max_diag);
+                resize(&mut self.ws.factor.dense_l, m * m);
                 self.stats.factor_entries = m * (m + 1) / 2;
             }
             Variant::Skyline | Variant::SkylineRefactor | Variant::Incremental | Variant::Auto => {
-                if !self.pattern_reused {
-                    self.env.build(&self.ap);
+                if !self.ws.permuted.pattern_reused {
+                    self.ws.factor.env.build(&self.ap);
                 }
-                let len = self.env.len();
+                let len = self.ws.factor.env.len();
                 self.stats.factor_entries = len;
-                size_to(&mut self.l, len);
+                size_to(&mut self.ws.factor.l, len);
                 if self.fip.iter().any(Option::is_some) {
                     self.cpl.reserve(m, len);
                 }
-                self.l0_valid = false;
-                self.refactor_spent = 0.0;
+                self.ws.factor.l0_valid = false;
+                self.ws.factor.refactor_spent = 0.0;
                 if matches!(variant, Variant::Skyline | Variant::Auto) {
-                    size_to(&mut self.l0, len);
+                    size_to(&mut self.ws.factor.l0, len);
                 }
                 // `auto` factors `L₀` only when its cost model first wants it (`ensure_l0`): a
                 // warm-started solve often never does, and its factor cost a whole refactor.
@@ -59,14 +60,14 @@ impl Solver {
             Variant::Pgs => {}
         }
         if self.opts.measure_deletion_error {
-            let n = if variant == Variant::Downdate { m * m } else { self.env.len() };
-            resize(&mut self.lref, n);
+            let n = if variant == Variant::Downdate { m * m } else { self.ws.factor.env.len() };
+            resize(&mut self.ws.factor.lref, n);
         }
     }
 
     /// Factors `L₀ = chol(A)` on the envelope unless it is already there (timed as factor time).
     pub(super) fn ensure_l0(&mut self) {
-        if self.l0_valid {
+        if self.ws.factor.l0_valid {
             return;
         }
         let t = Instant::now();
@@ -77,15 +78,20 @@ impl Solver {
     /// Factors `L₀ = chol(A)` on the envelope (untimed: the caller times it).
     fn factor_l0(&mut self) {
         self.tmp_tight_clear();
-        self.stats.regularized +=
-            self.env.factor_from(&self.ap, &self.tmp_tight, &mut self.l0, 0, self.max_diag);
-        self.l0_valid = true;
+        self.stats.regularized += self.ws.factor.env.factor_from(
+            &self.ap,
+            &self.ws.factor.tmp_tight,
+            &mut self.ws.factor.l0,
+            0,
+            self.max_diag,
+        );
+        self.ws.factor.l0_valid = true;
         self.stats.l0_factored = true;
     }
 
     pub(super) fn tmp_tight_clear(&mut self) {
-        self.tmp_tight.clear();
-        self.tmp_tight.resize(self.ap.n(), false);
+        self.ws.factor.tmp_tight.clear();
+        self.ws.factor.tmp_tight.resize(self.ap.n(), false);
     }
 
     /// Sets `λ_T` to the frozen bounds, solves eq. 6 with the variant's factor, computes `w`.
@@ -117,7 +123,7 @@ impl Solver {
         self.stats.solve_us += us(t);
 
         let which = self.factor_for(variant);
-        self.last_factor = which;
+        self.ws.factor.last_factor = which;
 
         let t = Instant::now();
         self.solve_with(which);
@@ -152,8 +158,13 @@ impl Solver {
             }
             Variant::SkylineRefactor => {
                 let t = Instant::now();
-                self.stats.regularized +=
-                    self.env.factor_from(&self.ap, &self.tight, &mut self.l, 0, self.max_diag);
+                self.stats.regularized += self.ws.factor.env.factor_from(
+                    &self.ap,
+                    &self.tight,
+                    &mut self.ws.factor.l,
+                    0,
+                    self.max_diag,
+                );
                 self.stats.factor_us += us(t);
                 FactorIn::L
             }
@@ -170,24 +181,24 @@ impl Solver {
     fn factor_compact(&mut self) -> FactorIn {
         let m = self.ap.n();
         let t = Instant::now();
-        self.free_idx.clear();
-        self.free_idx.extend((0..m).filter(|&i| !self.tight[i]));
-        let k = self.free_idx.len();
+        self.ws.factor.free_idx.clear();
+        self.ws.factor.free_idx.extend((0..m).filter(|&i| !self.tight[i]));
+        let k = self.ws.factor.free_idx.len();
         // Position of each free index in the compact system (reuse `sigma` as a map).
-        for (q, &i) in self.free_idx.iter().enumerate() {
-            self.sigma[i] = q as f64;
+        for (q, &i) in self.ws.factor.free_idx.iter().enumerate() {
+            self.ws.factor.sigma[i] = q as f64;
         }
-        resize(&mut self.compact, k * k);
-        for (q, &i) in self.free_idx.iter().enumerate() {
+        resize(&mut self.ws.factor.compact, k * k);
+        for (q, &i) in self.ws.factor.free_idx.iter().enumerate() {
             let (cols, vals) = self.ap.row(i);
             for (&j, &v) in cols.iter().zip(vals) {
                 if !self.tight[j] {
-                    self.compact[q * k + self.sigma[j] as usize] = v;
+                    self.ws.factor.compact[q * k + self.ws.factor.sigma[j] as usize] = v;
                 }
             }
         }
-        self.sigma.fill(0.0);
-        self.stats.regularized += dense::cholesky_in_place(&mut self.compact, k, self.max_diag);
+        self.ws.factor.sigma.fill(0.0);
+        self.stats.regularized += dense::cholesky_in_place(&mut self.ws.factor.compact, k, self.max_diag);
         self.stats.factor_us += us(t);
         FactorIn::Compact
     }
@@ -199,14 +210,14 @@ impl Solver {
             return FactorIn::L0;
         }
         let t = Instant::now();
-        self.dense_l.copy_from_slice(&self.dense_l0);
+        self.ws.factor.dense_l.copy_from_slice(&self.ws.factor.dense_l0);
         for i in 0..m {
             if self.tight[i] {
-                dense::delete_in_place(&mut self.dense_l, m, i, &mut self.sigma);
+                dense::delete_in_place(&mut self.ws.factor.dense_l, m, i, &mut self.ws.factor.sigma);
                 self.stats.deletions += 1;
             }
         }
-        self.sigma.fill(0.0);
+        self.ws.factor.sigma.fill(0.0);
         self.stats.downdate_us += us(t);
         self.measure_error(true);
         FactorIn::L
@@ -220,7 +231,7 @@ impl Solver {
             self.ensure_l0();
             return FactorIn::L0;
         }
-        if self.l_valid && self.tight == self.tight_l {
+        if self.ws.factor.l_valid && self.tight == self.ws.factor.tight_l {
             return FactorIn::L;
         }
         let (wd, wc, wf) = self.opts.auto_weights;
@@ -228,37 +239,44 @@ impl Solver {
         // comparison never sees: rent (refactor) until the refactors of this solve have cost what
         // buying (`L₀`) costs, then count it as paid (ski rental, at most twice the better of
         // the two in hindsight).
-        let l0_cost = if self.l0_valid {
+        let l0_cost = if self.ws.factor.l0_valid {
             0.0
         } else {
-            (wf * self.env.cost_factor_from(0) - self.refactor_spent).max(0.0)
+            (wf * self.ws.factor.env.cost_factor_from(0) - self.ws.factor.refactor_spent).max(0.0)
         };
         let end = self.free_end();
         // (a) deletions from L₀ (each skips the columns of the other tight indices).
         let tmin = self.tight.iter().position(|&t| t).unwrap_or(m);
-        self.env.free_column_sums(&self.tight, ROTATION_MIN_ENTRIES, &mut self.free_sums);
+        self.ws.factor.env.free_column_sums(&self.tight, ROTATION_MIN_ENTRIES, &mut self.ws.factor.free_sums);
         let del_all: f64 = (0..m)
             .filter(|&i| self.tight[i])
-            .map(|i| self.env.cost_delete_pending(i, end, &self.free_sums))
+            .map(|i| self.ws.factor.env.cost_delete_pending(i, end, &self.ws.factor.free_sums))
             .sum();
-        let lmin = if self.l_valid { self.tight_l.iter().position(|&t| t).unwrap_or(m) } else { 0 };
+        let lmin = if self.ws.factor.l_valid {
+            self.ws.factor.tight_l.iter().position(|&t| t).unwrap_or(m)
+        } else {
+            0
+        };
         let cost_a = l0_cost
-            + wc * self.env.cost_copy_from(self.env.first_column_of_row(tmin.min(lmin)))
+            + wc * self.ws.factor.env.cost_copy_from(self.ws.factor.env.first_column_of_row(tmin.min(lmin)))
             + wd * del_all;
         // (b) further deletions from the current factor, when T only grew.
         let grew = self.tight_only_grew();
         let cost_b = if grew {
             wd * (0..m)
-                .filter(|&i| self.tight[i] && !self.tight_l[i])
-                .map(|i| self.env.cost_delete_pending(i, end, &self.free_sums))
+                .filter(|&i| self.tight[i] && !self.ws.factor.tight_l[i])
+                .map(|i| self.ws.factor.env.cost_delete_pending(i, end, &self.ws.factor.free_sums))
                 .sum::<f64>()
         } else {
             f64::INFINITY
         };
         // (c) incremental refactor from the first change (a full refactor when L is stale).
-        let c =
-            if self.l_valid { (0..m).position(|i| self.tight[i] != self.tight_l[i]).unwrap_or(m) } else { 0 };
-        let cost_c = wf * self.env.cost_factor_from(c);
+        let c = if self.ws.factor.l_valid {
+            (0..m).position(|i| self.tight[i] != self.ws.factor.tight_l[i]).unwrap_or(m)
+        } else {
+            0
+        };
+        let cost_c = wf * self.ws.factor.env.cost_factor_from(c);
         if cost_b <= cost_a && cost_b <= cost_c {
             self.stats.auto_choices[1] += 1;
             self.delete_new_from_l();
@@ -267,7 +285,7 @@ impl Solver {
             self.delete_from_l0();
         } else {
             self.stats.auto_choices[2] += 1;
-            self.refactor_spent += cost_c;
+            self.ws.factor.refactor_spent += cost_c;
             self.incremental();
         }
         FactorIn::L
@@ -275,7 +293,7 @@ impl Solver {
 
     /// Whether the current factor `L` is valid and the tight set only grew since it was made.
     fn tight_only_grew(&self) -> bool {
-        self.l_valid && self.tight_l.iter().zip(&self.tight).all(|(&was, &is)| !was || is)
+        self.ws.factor.l_valid && self.ws.factor.tight_l.iter().zip(&self.tight).all(|(&was, &is)| !was || is)
     }
 
     /// Deletes from the current factor `L` the indices that became tight since it was made
@@ -285,12 +303,18 @@ impl Solver {
         let t = Instant::now();
         let end = self.free_end();
         for i in 0..m {
-            if self.tight[i] && !self.tight_l[i] {
-                self.env.delete_pending(&mut self.l, i, &mut self.sigma, end, &self.tight);
+            if self.tight[i] && !self.ws.factor.tight_l[i] {
+                self.ws.factor.env.delete_pending(
+                    &mut self.ws.factor.l,
+                    i,
+                    &mut self.ws.factor.sigma,
+                    end,
+                    &self.tight,
+                );
                 self.stats.deletions += 1;
             }
         }
-        self.tight_l.copy_from_slice(&self.tight);
+        self.ws.factor.tight_l.copy_from_slice(&self.tight);
         self.stats.downdate_us += us(t);
         self.measure_error(false);
     }
@@ -307,23 +331,33 @@ impl Solver {
         let m = self.ap.n();
         let t = Instant::now();
         let tmin = self.tight.iter().position(|&t| t).unwrap_or(m);
-        if self.l_valid {
+        if self.ws.factor.l_valid {
             // Deleting i writes columns g_i.. only (row i is zeroed from g_i on), so the columns
             // before g_{min(T ∪ T_L)} are identical in L and L₀.
-            let lmin = self.tight_l.iter().position(|&t| t).unwrap_or(m);
-            self.env.copy_from_column(&self.l0, &mut self.l, self.env.first_column_of_row(tmin.min(lmin)));
+            let lmin = self.ws.factor.tight_l.iter().position(|&t| t).unwrap_or(m);
+            self.ws.factor.env.copy_from_column(
+                &self.ws.factor.l0,
+                &mut self.ws.factor.l,
+                self.ws.factor.env.first_column_of_row(tmin.min(lmin)),
+            );
         } else {
-            self.env.copy_from_column(&self.l0, &mut self.l, 0);
+            self.ws.factor.env.copy_from_column(&self.ws.factor.l0, &mut self.ws.factor.l, 0);
         }
         let end = self.free_end();
         for i in tmin..m {
             if self.tight[i] {
-                self.env.delete_pending(&mut self.l, i, &mut self.sigma, end, &self.tight);
+                self.ws.factor.env.delete_pending(
+                    &mut self.ws.factor.l,
+                    i,
+                    &mut self.ws.factor.sigma,
+                    end,
+                    &self.tight,
+                );
                 self.stats.deletions += 1;
             }
         }
-        self.tight_l.copy_from_slice(&self.tight);
-        self.l_valid = true;
+        self.ws.factor.tight_l.copy_from_slice(&self.tight);
+        self.ws.factor.l_valid = true;
         self.stats.downdate_us += us(t);
         self.measure_error(false);
     }
@@ -332,11 +366,15 @@ impl Solver {
     pub(super) fn incremental(&mut self) {
         let m = self.ap.n();
         let t = Instant::now();
-        let c =
-            if self.l_valid { (0..m).position(|i| self.tight[i] != self.tight_l[i]).unwrap_or(m) } else { 0 };
-        self.stats.regularized += self.env.factor_from(&self.ap, &self.tight, &mut self.l, c, self.max_diag);
-        self.tight_l.copy_from_slice(&self.tight);
-        self.l_valid = true;
+        let c = if self.ws.factor.l_valid {
+            (0..m).position(|i| self.tight[i] != self.ws.factor.tight_l[i]).unwrap_or(m)
+        } else {
+            0
+        };
+        self.stats.regularized +=
+            self.ws.factor.env.factor_from(&self.ap, &self.tight, &mut self.ws.factor.l, c, self.max_diag);
+        self.ws.factor.tight_l.copy_from_slice(&self.tight);
+        self.ws.factor.l_valid = true;
         self.stats.factor_us += us(t);
     }
 
@@ -348,28 +386,31 @@ impl Solver {
         let m = self.ap.n();
         let (abs, norm) = if dense_storage {
             // Dense: refactor the masked matrix densely.
-            self.ap.to_dense(&mut self.lref);
+            self.ap.to_dense(&mut self.ws.factor.lref);
             for i in 0..m {
                 if self.tight[i] {
                     for j in 0..m {
-                        self.lref[i * m + j] = 0.0;
-                        self.lref[j * m + i] = 0.0;
+                        self.ws.factor.lref[i * m + j] = 0.0;
+                        self.ws.factor.lref[j * m + i] = 0.0;
                     }
-                    self.lref[i * m + i] = 1.0;
+                    self.ws.factor.lref[i * m + i] = 1.0;
                 }
             }
-            dense::cholesky_in_place(&mut self.lref, m, self.max_diag);
-            let abs = dense::frobenius_diff(&self.dense_l, &self.lref, m);
+            dense::cholesky_in_place(&mut self.ws.factor.lref, m, self.max_diag);
+            let abs = dense::frobenius_diff(&self.ws.factor.dense_l, &self.ws.factor.lref, m);
             let norm = (0..m)
-                .map(|j| self.lref[j * m + j..j * m + m].iter().map(|x| x * x).sum::<f64>())
+                .map(|j| self.ws.factor.lref[j * m + j..j * m + m].iter().map(|x| x * x).sum::<f64>())
                 .sum::<f64>();
             (abs, norm.sqrt())
         } else {
-            let back = self.env.backward_error(&self.ap, &self.tight, &self.l);
+            let back = self.ws.factor.env.backward_error(&self.ap, &self.tight, &self.ws.factor.l);
             let cur = self.stats.deletion_backward_error.unwrap_or(0.0);
             self.stats.deletion_backward_error = Some(cur.max(back));
-            self.env.factor_from(&self.ap, &self.tight, &mut self.lref, 0, self.max_diag);
-            (self.env.frobenius_diff(&self.l, &self.lref), self.env.frobenius(&self.lref))
+            self.ws.factor.env.factor_from(&self.ap, &self.tight, &mut self.ws.factor.lref, 0, self.max_diag);
+            (
+                self.ws.factor.env.frobenius_diff(&self.ws.factor.l, &self.ws.factor.lref),
+                self.ws.factor.env.frobenius(&self.ws.factor.lref),
+            )
         };
         let rel = abs / norm.max(f64::MIN_POSITIVE);
         let cur = self.stats.deletion_error.unwrap_or(0.0);
@@ -383,19 +424,23 @@ impl Solver {
         let m = self.ap.n();
         match (self.kernel, which) {
             (_, FactorIn::Compact) => {
-                let k = self.free_idx.len();
-                for (q, &i) in self.free_idx.iter().enumerate() {
+                let k = self.ws.factor.free_idx.len();
+                for (q, &i) in self.ws.factor.free_idx.iter().enumerate() {
                     self.tmp[q] = self.rhs[i];
                 }
-                dense::solve_in_place(&self.compact, k, &mut self.tmp[..k]);
-                for (q, &i) in self.free_idx.iter().enumerate() {
+                dense::solve_in_place(&self.ws.factor.compact, k, &mut self.tmp[..k]);
+                for (q, &i) in self.ws.factor.free_idx.iter().enumerate() {
                     self.rhs[i] = self.tmp[q];
                 }
             }
-            (Variant::Downdate, FactorIn::L0) => dense::solve_in_place(&self.dense_l0, m, &mut self.rhs),
-            (Variant::Downdate, FactorIn::L) => dense::solve_in_place(&self.dense_l, m, &mut self.rhs),
-            (_, FactorIn::L0) => self.env.solve(&self.l0, &mut self.rhs),
-            (_, FactorIn::L) => self.env.solve(&self.l, &mut self.rhs),
+            (Variant::Downdate, FactorIn::L0) => {
+                dense::solve_in_place(&self.ws.factor.dense_l0, m, &mut self.rhs)
+            }
+            (Variant::Downdate, FactorIn::L) => {
+                dense::solve_in_place(&self.ws.factor.dense_l, m, &mut self.rhs)
+            }
+            (_, FactorIn::L0) => self.ws.factor.env.solve(&self.ws.factor.l0, &mut self.rhs),
+            (_, FactorIn::L) => self.ws.factor.env.solve(&self.ws.factor.l, &mut self.rhs),
         }
     }
 

@@ -23,95 +23,23 @@
 //! percentile of `|b_i| / A_ii`: an impulse of the island's own scale), friction rows at 0;
 //! `z = max(±w, 0) + 0.1 ‖w‖∞`.
 //!
-//! **Restarts.** Where a run stalls depends on where it starts. On the forwarder's grasp
-//! (`forwarder-hard02`, which no strategy here had solved, cold, within 5,000 steps) the run from
-//! the start above stalls near 1e-4, but one from `s₀` at the 95th percentile and
-//! `z = max(±w, 0) + 0.3 ‖w‖∞` converges in 13 iterations; `forwarder-hard00` (280 steps) in 23.
-//! After the first run and its failed trial, the restart solves them in 31 and 75 steps.
-//! So a run that stalls, and whose index set the pivoting cannot finish in its bounded trial, is
-//! followed by one from that second start (`IPM_STARTS`) before the pivoting gets its own index
-//! set back. Problems whose first run converges, or whose trial does, are untouched. Measured
-//! (session of 2026-12-02 night, corpus, `auto`): cold within 35 / 100 steps 26 / 28 → 27 / 30
-//! of 30; with the switch on every solve (`ipm_after = 3`) warm and cold together 52 / 56 → 54 /
-//! 60 of 60; the defaults' warm files unchanged (15 / 22); in simulation (winch shipped and at
-//! contact compliance 1e-10, forklift at 1e-10) no solve changed. The second start is the best
-//! of nine measured (percentile 90, 95, 99 × `ζ` 0.03, 0.3, 1.0: within 100 steps 28–30, median
-//! 29; within 35, 26–27), and a third start (twelve pairs measured) gave 28–30 as well: read the
-//! corpus's 30 as 29 ± 1 — the counts move with the start, which is what the restart uses. A
-//! single run from the second start alone is no better than the first: 27 / 30 at that exact
-//! point, 24–27 / 25–28 around it.
+//! **Restarts.** Where a run stalls depends on where it starts. A run that stalls, and whose index
+//! set the pivoting cannot finish in its bounded trial (`CROSSOVER_TRIAL`), is followed by one from
+//! the next, more interior start of `IPM_STARTS` before the pivoting gets its own point back;
+//! problems whose first run converges, or whose trial does, are untouched.
 //!
 //! **Stop** when the natural-map residual against the bounds at the iterate's own normal impulses
 //! is within the solve's tolerance (the pivoting's criterion); the index set returned is the one
 //! the iterate identifies (`s_k < z_k`: tight). Every iterate is strictly feasible — inside each
 //! box and each friction cone — so a capped IPM iterate is a safe answer by construction.
 //!
-//! **Measured** (session of 2026-12-02, `server/tests/data/corpus`, the 30 hardest islands of the
-//! scenes, `auto`, release). The method alone, cold: the residual falls below 1e-9 within 12–22
-//! iterations on all forklift and shipped-winch files and on four of six forwarder files, where the
-//! pivoting needs 20–300 steps (`forklift-c1e-10-hard02` 267 → 12, `forwarder-hard04` 300+ → 9);
-//! it stalls at 1e-4 on the forwarder's grasp with 42 redundant teeth (`hard00`, `hard02`) and
-//! wanders on the winch's sliding chains at contact compliance 1e-10 (then the crossover from its
-//! index set finishes `hard01`/`hard02` in 26–29 steps). Files within 35 / 100 steps:
-//!
-//! | start | warm ≤ 35 | warm ≤ 100 | cold ≤ 35 | cold ≤ 100 | cold, total time |
-//! |---|---|---|---|---|---|
-//! | pivoting alone (earlier defaults) | 15 | 22 | 11 | 21 | 266 ms |
-//! | switch after 3 steps, cold only (`ipm_cold_after = 3`, the default) | 15 | 22 | 25 | 26 | 105 ms |
-//! | switch after 3 steps, every solve (`ipm_after = 3`) | 25 | 28 | 25 | 26 | 105 ms |
-//! | the default, crossover from a stalled run below 1e-4 (was 1e-6) | 15 | 22 | 26 | 28 | 0.79× the row above, paired |
-//! | every solve, crossover below 1e-4 | 26 | 28 | 26 | 28 | — |
-//! | the default with a second start after a failed trial (now; "Restarts") | 15 | 22 | 27 | 30 | — |
-//! | every solve, with the second start (now) | 27 | 30 | 27 | 30 | — |
-//!
-//! (The crossover threshold, measured later: the winch's sliding chains at 1e-10 stall at
-//! 1e-5…2e-5 — `hard00`, `hard02` — and with `CROSSOVER_BELOW = 1e-6` went back to the pivoting's
-//! own start, 103–107 steps; from the stalled run's index set they need 32–48. Total cold time at
-//! cap 100, four alternated pairs with the earlier build: 107–141 → 93–117 ms (median ratio
-//! 0.79). A patience of 3–5 instead of 8 crosses over too early: `winch-c1e-10-hard03`, which
-//! wanders for 20 iterations at 1e-5 and then converges, never does from its index set at 4e-5
-//! (300+ steps); crossing over from the run's best iterate rather than its last, and semismooth
-//! Newton before the pivoting, moved single files both ways and cost the winch at 1e-10 in
-//! simulation 3 → 9 capped solves. Unbounded, the
-//! crossover from a stalled run can be a dead end: a generated crane-shaped island, `m = 430`,
-//! seed 5 of `generate::contact_like`, went from 44 steps to 1,000+ — hence a trial of
-//! `CROSSOVER_TRIAL = 30` steps, after which the pivoting goes back to its own start: that file
-//! then needs 74; 15 would lose `winch-c1e-10-hard00`, 27 steps after its crossover. In simulation
-//! at the paper's cap, the winch — the one scene that switches warm solves, `ipm_after = 4` — keeps
-//! 0 capped solves as shipped and 3 at contact compliance 1e-10, their largest residual 5e-4 →
-//! 2.3e-5.)
-//!
-//! Switching at once (`0`) costs the problems the pivoting finishes in 2 steps (a Siconos box
-//! stack: 29 iterations to 7e-9) and a generated crane island (34 → 64 steps): hence after 3.
-//! The Newton matrix is not symmetric; a first version that refused non-positive pivots of its
-//! LU broke down on 20 of 30 files, and GMRES preconditioned by `chol(A + D)` needed 4–60
-//! iterations per direction (125–4,000 per solve): the envelope LU is one factorization.
-//!
-//! **In simulation** (20 s, cap 35, `auto`) cold solves with friction do not occur (warm starts
-//! carry every island), so the default changes no trajectory. Switching every solve after `k`
-//! steps (`ipm_after`) is mixed, hence a scene setting, off by default: winch at contact
-//! compliance 1e-10 31 capped solves → 19 (k = 0), 22 (3), 26 (6); vehicle at 1e-10 1 → 0 (k = 3,
-//! mean solve 3× longer), 2 (10); forklift at 1e-10 9 → 8–9; but the forwarder 8 → 16–29: its
-//! grasp is where the method stalls, and the steps it spends are missing from the pivoting.
-//! Together with semismooth Newton first (`newton_first`, whose own measure alone is 53 there)
-//! the winch's sliding chain gains most: at 1e-10 31 → 3 (k = 4), 6 (6), 5 (8 and 10) — but 167
-//! at k = 14, a cascade — and at 1e-8 12 → 0, for a mean solve 1.5× longer at its shipped 1e-7;
-//! the winch scene ships with `newton_first` and `ipm_after = 4`. The same pair costs the
-//! forklift at 1e-10 (9 → 15 at k = 6, 26 with Newton first alone).
-//! Switching only once the outer friction iteration has begun (after 3 steps and 1 or 3 bound
-//! updates) was worse: forklift at 1e-10 743 capped solves (a cascade), forwarder 75–124.
-//! Why the grasp stalls (measured on `forwarder-hard00`): the steps collapse to `α ≈ 1e-5…1e-10`
-//! blocked by one friction row of a redundant tooth whose Newton direction is `‖Δλ‖ ≈ 5e6` — the
-//! flat valley of redundant contacts (smallest eigenvalue `c/h²`), interior there, so `D ≈ 0`
-//! does not regularize it; a proximal term `δ A_ii` (δ = 1e-8…1e-4) and iterative refinement of
-//! the directions changed nothing or made it worse. Starting from the warm `λ` pushed inside its
-//! boxes (by θ = 0.1 or 0.01 of the scale, `z` to match) instead of the centre: warm files within
-//! 35 steps with the switch after 3, 25 → 21 of 30 (the usual IPM experience: a start near the
-//! boundary is a poor one).
+//! What it gains on the corpus and in simulation, where it stalls and why, and what was tried and
+//! dropped: `docs/notes/solver.md`.
 
 use super::super::IndexState;
 use super::super::envelope_lu::LuError;
-use super::{Solver, resize};
+use super::solver::{Solver, resize};
+use super::workspace::RowKind;
 
 /// Iterations without halving the best residual after which the method gives up.
 const IPM_PATIENCE: usize = 8;
@@ -131,20 +59,6 @@ const IPM_STARTS: [(usize, f64); 2] = [(90, 0.1), (95, 0.3)];
 /// Fraction of the step to the boundary.
 const TO_BOUNDARY: f64 = 0.995;
 
-/// The bounds a row takes part in.
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
-pub(super) enum RowKind {
-    /// No finite bound.
-    #[default]
-    Free,
-    /// `lo ≤ λ` and/or `λ ≤ hi` (plain rows).
-    Box { lower: bool, upper: bool },
-    /// `lo λ_n ≤ λ ≤ hi λ_n` for the normal row `n`.
-    Friction(usize),
-    /// `lo = hi`: held at that value.
-    Fixed(f64),
-}
-
 impl Solver {
     /// The interior point method, then block pivoting from the index set it identified:
     /// - converged: at most `CROSSOVER_STEPS` pivot steps to the exact solution of that index set
@@ -152,9 +66,15 @@ impl Solver {
     ///   converge, the interior point's own answer stands;
     /// - not converged but within `CROSSOVER_BELOW`: pivoting from its index set for at most
     ///   `CROSSOVER_TRIAL` steps;
-    /// - still not converged: the same from the next of `IPM_STARTS`; after the last, pivoting
-    ///   resumes from the index set it had before the switch.
-    pub(super) fn interior_point_with_crossover(&mut self, variant: super::Variant, friction: bool) -> bool {
+    /// - still not converged: the same from the next of `IPM_STARTS`; after the last, the pivoting
+    ///   resumes exactly where it stopped (its `λ`, index set, frozen friction bounds, loop
+    ///   progress and best residual), so that a failed switch costs its own iterations and does
+    ///   not change the pivoting's path (`tests/solver_regression_big1000.rs`).
+    pub(super) fn interior_point_with_crossover(
+        &mut self,
+        variant: super::super::Variant,
+        friction: bool,
+    ) -> bool {
         self.save_point();
         for &start in &IPM_STARTS {
             self.ipm.start = start;
@@ -188,29 +108,38 @@ impl Solver {
             }
         }
         // Far from a solution (its index set says little), or the trial failed: back to where
-        // the pivoting was.
+        // the pivoting was, which goes on as if it had never switched.
         self.restore_point();
-        self.bpp_loop(variant, friction, true)
+        self.resume_pivoting(variant, friction, self.ws.saved.progress)
     }
 
-    /// Keeps the index set and `λ` (`ipm_state`, `ipm_lam`) to come back to.
+    /// Keeps the point to come back to: the index set, `λ`, the frozen bounds, the best residual
+    /// and the pivoting loop's progress (`ipm_state`, `ipm_lam`, `ipm_lo`, `ipm_hi`, …).
     fn save_point(&mut self) {
-        self.ipm_state.clear();
-        self.ipm_state.extend_from_slice(&self.state);
-        self.ipm_lam.clear();
-        self.ipm_lam.extend_from_slice(&self.lam);
+        self.ws.saved.state.clear();
+        self.ws.saved.state.extend_from_slice(&self.state);
+        self.ws.saved.lam.clear();
+        self.ws.saved.lam.extend_from_slice(&self.lam);
+        self.ws.saved.lo.clear();
+        self.ws.saved.lo.extend_from_slice(&self.lo_eff);
+        self.ws.saved.hi.clear();
+        self.ws.saved.hi.extend_from_slice(&self.hi_eff);
+        self.ws.saved.best_res = self.best_res;
+        self.ws.saved.progress = self.progress;
     }
 
-    /// Back to the kept index set and `λ`, with their frozen bounds and `w`.
+    /// Back to the kept point, with its `w`.
     fn restore_point(&mut self) {
-        self.state.copy_from_slice(&self.ipm_state);
-        self.lam.copy_from_slice(&self.ipm_lam);
+        self.state.copy_from_slice(&self.ws.saved.state);
+        self.lam.copy_from_slice(&self.ws.saved.lam);
         for (t, s) in self.tight.iter_mut().zip(&self.state) {
             *t = s.is_tight();
         }
-        self.update_bounds();
+        self.lo_eff.copy_from_slice(&self.ws.saved.lo);
+        self.hi_eff.copy_from_slice(&self.ws.saved.hi);
+        self.best_res = self.ws.saved.best_res;
         self.compute_w();
-        self.l_valid = false;
+        self.ws.factor.l_valid = false;
     }
 
     /// Runs the interior point method from scratch on the current (permuted) problem, each
@@ -479,7 +408,7 @@ impl Solver {
             self.tight[i] = state.is_tight();
         }
         self.update_bounds();
-        self.l_valid = false;
+        self.ws.factor.l_valid = false;
     }
 }
 
@@ -523,31 +452,4 @@ fn side_step(tau: f64, s: f64, z: f64, ds: f64) -> (f64, f64) {
 /// Largest `t ≥ 0` with `x + t dx ≥ 0` (∞ when `dx ≥ 0`).
 fn step_to_zero(x: f64, dx: f64) -> f64 {
     if dx < 0.0 { -x / dx } else { f64::INFINITY }
-}
-
-/// Scratch of the interior point method, sized by the island and reused.
-#[derive(Debug, Default)]
-pub(super) struct IpmWork {
-    kind: Vec<RowKind>,
-    env: super::Envelope,
-    lu: super::super::envelope_lu::EnvelopeLu,
-    zl: Vec<f64>,
-    zu: Vec<f64>,
-    sl: Vec<f64>,
-    su: Vec<f64>,
-    d: Vec<f64>,
-    cv: Vec<f64>,
-    cpl: Vec<Option<usize>>,
-    dlam: Vec<f64>,
-    dsl: Vec<f64>,
-    dsu: Vec<f64>,
-    dzl: Vec<f64>,
-    dzu: Vec<f64>,
-    aff_l: Vec<f64>,
-    aff_u: Vec<f64>,
-    ratio: Vec<f64>,
-    /// Smallest relative residual of this run's iterates.
-    best: f64,
-    /// The start of this run, one of `IPM_STARTS`.
-    start: (usize, f64),
 }

@@ -19,7 +19,7 @@
 
 use super::super::pgs::{inverse_diagonal, pgs_sweep};
 use super::super::{effective_bounds, natural_residual};
-use super::Solver;
+use super::solver::Solver;
 
 impl Solver {
     /// Makes `λ` (permuted order) feasible and of non-positive merit (module docs); leaves the
@@ -55,7 +55,7 @@ impl Solver {
         }
         let f = 0.5 * lal - bl;
         // A NaN merit is not positive: nothing to scale.
-        if f.is_nan() || f <= 0.0 || !self.zero_feasible {
+        if f.is_nan() || f <= 0.0 || !self.ws.safe.zero_feasible {
             return false;
         }
         self.safe_unchanged = false;
@@ -76,8 +76,10 @@ impl Solver {
         for c in 0..3 {
             match c {
                 0 => self.lam.copy_from_slice(&self.best),
-                1 => self.lam.copy_from_slice(&self.warm_lam),
-                _ if self.have_frozen && self.prox_shift == 0.0 => self.lam.copy_from_slice(&self.frozen),
+                1 => self.lam.copy_from_slice(&self.ws.safe.warm_lam),
+                _ if self.ws.safe.have_frozen && self.prox_shift == 0.0 => {
+                    self.lam.copy_from_slice(&self.ws.safe.frozen)
+                }
                 _ => continue,
             }
             let scaled = self.make_safe(false);
@@ -126,9 +128,9 @@ impl Solver {
         if r0.is_nan() || r0 <= self.opts.polish_above {
             return;
         }
-        self.polish_save.clear();
-        self.polish_save.extend_from_slice(&self.lam);
-        inverse_diagonal(&self.ap, &mut self.inv_diag);
+        self.ws.safe.polish_save.clear();
+        self.ws.safe.polish_save.extend_from_slice(&self.lam);
+        inverse_diagonal(&self.ap, &mut self.ws.safe.inv_diag);
         let mut done = 0;
         while done < sweeps {
             if self.past_deadline() {
@@ -140,7 +142,7 @@ impl Solver {
                 &self.lop,
                 &self.hip,
                 &self.fip,
-                &self.inv_diag,
+                &self.ws.safe.inv_diag,
                 1.0,
                 &mut self.lam,
             ) {
@@ -154,7 +156,7 @@ impl Solver {
             self.stats.polish_sweeps = done;
             self.stats.energy_scaled = scaled;
         } else {
-            self.lam.copy_from_slice(&self.polish_save);
+            self.lam.copy_from_slice(&self.ws.safe.polish_save);
             self.compute_w();
         }
     }
@@ -178,7 +180,7 @@ impl Solver {
     /// factor of `A_JJ` (the pivoting's kernel with every `C` row tight) and two solves.
     pub(super) fn exact_bilateral(&mut self) {
         let m = self.ap.n();
-        if !self.opts.exact_bilateral || self.non_finite || m == 0 || !self.zero_feasible {
+        if !self.opts.exact_bilateral || self.non_finite || m == 0 || !self.ws.safe.zero_feasible {
             return;
         }
         let bilateral = |i: usize, s: &Self| {
@@ -188,8 +190,8 @@ impl Solver {
         if nb == 0 || nb == m {
             return;
         }
-        self.bil_tight.clear();
-        self.bil_tight.extend_from_slice(&self.tight);
+        self.ws.safe.bil_tight.clear();
+        self.ws.safe.bil_tight.extend_from_slice(&self.tight);
         for i in 0..m {
             self.tight[i] = !bilateral(i, self);
         }
@@ -197,10 +199,10 @@ impl Solver {
         self.factor_for(kernel);
         // λ(1): the joints for the contact impulses as they are.
         self.refine_free();
-        self.bil_d.clear();
-        self.bil_d.extend_from_slice(&self.lam);
-        self.bil_ad.clear();
-        self.bil_ad.extend_from_slice(&self.w);
+        self.ws.safe.bil_d.clear();
+        self.ws.safe.bil_d.extend_from_slice(&self.lam);
+        self.ws.safe.bil_ad.clear();
+        self.ws.safe.bil_ad.extend_from_slice(&self.w);
         // λ(0): the joints alone.
         for i in 0..m {
             if self.tight[i] {
@@ -212,10 +214,10 @@ impl Solver {
         // d = λ(1) − λ(0), A d = w(1) − w(0); g(t) = g(0) + t dᵀw(0) + ½ t² dᵀAd.
         let (mut dw0, mut dad) = (0.0, 0.0);
         for i in 0..m {
-            self.bil_d[i] -= self.lam[i];
-            self.bil_ad[i] -= self.w[i];
-            dw0 += self.bil_d[i] * self.w[i];
-            dad += self.bil_d[i] * self.bil_ad[i];
+            self.ws.safe.bil_d[i] -= self.lam[i];
+            self.ws.safe.bil_ad[i] -= self.w[i];
+            dw0 += self.ws.safe.bil_d[i] * self.w[i];
+            dad += self.ws.safe.bil_d[i] * self.ws.safe.bil_ad[i];
         }
         let t = if dad > 0.0 {
             (-dw0 / dad).clamp(0.0, 1.0)
@@ -226,10 +228,10 @@ impl Solver {
         };
         let t = if t.is_finite() { t } else { 0.0 };
         for i in 0..m {
-            self.lam[i] += t * self.bil_d[i];
+            self.lam[i] += t * self.ws.safe.bil_d[i];
         }
         self.compute_w();
         self.stats.bilateral_scale = Some(t);
-        self.tight.copy_from_slice(&self.bil_tight);
+        self.tight.copy_from_slice(&self.ws.safe.bil_tight);
     }
 }

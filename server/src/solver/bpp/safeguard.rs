@@ -4,7 +4,7 @@
 use std::time::Instant;
 
 use super::super::{IndexState, Variant, effective_bounds, natural_residual};
-use super::{Solver, resize, us};
+use super::solver::{Solver, resize, us};
 
 impl Solver {
     /// Safeguard of the block pivoting for *fixed* bounds: a primal feasible active-set method on
@@ -360,18 +360,18 @@ impl Solver {
         self.needs_prox = false;
         let rho = 1e-5 * self.max_diag;
         self.prox_shift = rho;
-        self.ap.diagonal_into(&mut self.diag0);
+        self.ap.diagonal_into(&mut self.ws.proximal.diag0);
         for i in 0..m {
-            self.tmp[i] = self.diag0[i] + rho;
+            self.tmp[i] = self.ws.proximal.diag0[i] + rho;
         }
         self.ap.set_diagonal(&self.tmp);
-        resize(&mut self.bp0, m);
-        self.bp0.copy_from_slice(&self.bp);
-        resize(&mut self.center, m);
-        self.center.copy_from_slice(&self.best);
+        resize(&mut self.ws.proximal.bp0, m);
+        self.ws.proximal.bp0.copy_from_slice(&self.bp);
+        resize(&mut self.ws.proximal.center, m);
+        self.ws.proximal.center.copy_from_slice(&self.best);
         self.lam.copy_from_slice(&self.best);
         let t = Instant::now();
-        self.l_valid = false;
+        self.ws.factor.l_valid = false;
         self.prepare(variant);
         self.stats.factor_us += us(t);
         let mut best_true = f64::INFINITY;
@@ -379,18 +379,18 @@ impl Solver {
         while !self.stop_now() {
             self.stats.proximal_iterations += 1;
             for i in 0..m {
-                self.bp[i] = self.bp0[i] + rho * self.center[i];
+                self.bp[i] = self.ws.proximal.bp0[i] + rho * self.ws.proximal.center[i];
             }
             self.compute_w();
             let inner = self.bpp_loop(variant, friction, true);
             // True w of the original problem.
             for i in 0..m {
-                self.tmp[i] = self.w[i] - rho * (self.lam[i] - self.center[i]);
+                self.tmp[i] = self.w[i] - rho * (self.lam[i] - self.ws.proximal.center[i]);
             }
             let (r, rr) = natural_residual(&self.lam, &self.tmp, &self.lop, &self.hip, &self.fip);
             if rr < best_true {
                 best_true = rr;
-                self.prox_best.clone_from(&self.lam);
+                self.ws.proximal.best.clone_from(&self.lam);
             }
             if rr <= self.opts.tol_rel || r == 0.0 {
                 converged = true;
@@ -399,14 +399,14 @@ impl Solver {
             if !inner || self.non_finite {
                 break;
             }
-            self.center.copy_from_slice(&self.lam);
+            self.ws.proximal.center.copy_from_slice(&self.lam);
         }
         // Back to the original problem.
-        self.ap.set_diagonal(&self.diag0);
-        self.bp.copy_from_slice(&self.bp0);
+        self.ap.set_diagonal(&self.ws.proximal.diag0);
+        self.bp.copy_from_slice(&self.ws.proximal.bp0);
         self.prox_shift = 0.0;
         if best_true.is_finite() {
-            self.best.copy_from_slice(&self.prox_best);
+            self.best.copy_from_slice(&self.ws.proximal.best);
         }
         if converged {
             self.best.copy_from_slice(&self.lam);
