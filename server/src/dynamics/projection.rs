@@ -37,7 +37,7 @@
 
 use std::time::Instant;
 
-use nalgebra::{UnitQuaternion, Vector3};
+use nalgebra::{Matrix3, UnitQuaternion, Vector3};
 
 use super::assemble::BodyMotion;
 use super::body::RigidBody;
@@ -65,8 +65,16 @@ pub(crate) fn project(
         for (i, b) in bodies.iter().enumerate() {
             let mut m = BodyMotion { dynamic: b.is_dynamic(), inv_mass: b.inv_mass(), ..Default::default() };
             if m.dynamic {
+                // The inertia of the velocity step: raised by the geometric stiffness where it was.
                 let r = ws.q_new[i].to_rotation_matrix().into_inner();
-                m.inv_inertia = r * b.inv_inertia_body() * r.transpose();
+                let s = ws.gs_iso.get(i).copied().unwrap_or(0.0);
+                let inv_b = match s > 0.0 {
+                    true => (b.inertia_body() + Matrix3::identity() * s)
+                        .try_inverse()
+                        .unwrap_or(*b.inv_inertia_body()),
+                    false => *b.inv_inertia_body(),
+                };
+                m.inv_inertia = r * inv_b * r.transpose();
             }
             ws.proj_motion.push(m);
         }

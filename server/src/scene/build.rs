@@ -720,6 +720,9 @@ impl<'a> Builder<'a> {
         if let Some(e) = sec.energy_margin {
             watchdog.energy_margin = self.positive(sspan, "energy_margin", e)?;
         }
+        if let Some(e) = sec.max_joint_error {
+            watchdog.max_joint_error = self.positive(sspan, "max_joint_error", e)?;
+        }
         Ok(watchdog)
     }
 

@@ -74,6 +74,7 @@ pub(crate) struct SceneSection {
     pub geometric_stiffness: Option<String>,
     pub max_speed: Option<f64>,
     pub energy_margin: Option<f64>,
+    pub max_joint_error: Option<f64>,
 }
 
 /// `[[material]]`: friction of a pair of named materials.
