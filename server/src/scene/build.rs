@@ -17,7 +17,7 @@ use toml::Spanned;
 use super::checks::{R, Source};
 use super::controls::{
     Actuator, ActuatorFault, ActuatorKind, ActuatorTarget, AxisMode, ButtonAction, Controls, JoyAxis,
-    JoyButton, JoystickMap, Neutral, SceneEvent, Script, ScriptEntry,
+    JoyButton, JoystickMap, Neutral, RampProfile, SceneEvent, Script, ScriptEntry,
 };
 use super::format::*;
 use super::{Scene, SceneError};
@@ -1134,6 +1134,17 @@ fn script(b: &Builder, controls: &Controls, defs: &[Spanned<ScriptDef>]) -> R<Sc
         let (span, d) = (e.span(), e.get_ref());
         let t = b.non_negative(&span, "t", d.t)?;
         let ramp = b.non_negative(&span, "ramp", d.ramp.unwrap_or(0.0))?;
+        let profile = match d.profile.as_deref() {
+            None | Some("smooth") => RampProfile::Smooth,
+            Some("linear") => RampProfile::Linear,
+            Some(other) => {
+                return Err(b.invalid(
+                    &span,
+                    "profile",
+                    format!("unknown ramp profile `{other}` (smooth, linear)"),
+                ));
+            }
+        };
         let mut set = Vec::new();
         for (name, &v) in &d.set {
             set.push((actuator_index(b, controls, &span, "set", name)?, b.finite(&span, "set", v)?));
@@ -1143,7 +1154,7 @@ fn script(b: &Builder, controls: &Controls, defs: &[Spanned<ScriptDef>]) -> R<Sc
             None if d.joint.is_some() => return Err(b.invalid(&span, "joint", "`joint` without `event`")),
             None => None,
         };
-        entries.push(ScriptEntry { t, set, ramp, event });
+        entries.push(ScriptEntry { t, set, ramp, profile, event });
     }
     Ok(Script::new(entries, controls.actuators.len()))
 }

@@ -366,6 +366,7 @@ pub(crate) struct ScriptDef {
     #[serde(default)]
     pub set: BTreeMap<String, f64>,
     pub ramp: Option<f64>,
+    pub profile: Option<String>,
     pub event: Option<String>,
     pub joint: Option<String>,
 }

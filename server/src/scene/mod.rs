@@ -52,7 +52,7 @@ use thiserror::Error;
 pub use builtin::{BUILTIN, BuiltinScene, builtin};
 pub use controls::{
     Actuator, ActuatorFault, ActuatorKind, ActuatorTarget, AxisMode, ButtonAction, Controls, InputError,
-    JoyAxis, JoyButton, JoystickError, JoystickMap, Neutral, SceneEvent, Script, ScriptEntry,
+    JoyAxis, JoyButton, JoystickError, JoystickMap, Neutral, RampProfile, SceneEvent, Script, ScriptEntry,
 };
 pub use faults::{Fault, FaultAction, FaultError, FaultRequest, FaultTrigger, Faults, MAX_FAULTS};
 pub use overrides::{OverrideError, SceneOverride};
