@@ -259,6 +259,26 @@ mod tests {
         assert!(gap.symmetric_eigen().eigenvalues.min() > -1e-9, "{gap}");
     }
 
+    /// (G6) on a 0.5 kg link of 0.1 m (`I_min ≈ 4e-4`) at `h = 1/60`: a tension that holds or grows
+    /// by half does not lag the stiffness it was solved with (α = 1), one that jumps from a slack
+    /// 2 N to 6e4 N does; the bound is `2 (I + m r² + α h² ‖K̃_used‖)` exactly.
+    #[test]
+    fn a_jump_of_the_tension_lags_and_a_steady_one_does_not() {
+        let (m, p, h) = (0.5, Vector3::new(4e-4, 4e-4, 2.5e-5), 1.0 / 60.0);
+        let r2 = 0.05f64 * 0.05;
+        let k = |t: f64| Matrix3::identity() * (t * 0.05);
+        let alpha = |t: f64| weight(&k(t), r2, m, &p, h);
+        assert_eq!(alpha(6e4), 1.0);
+        assert!(!lags(&k(6e4), r2, &k(6e4), alpha(6e4), m, &p, h));
+        assert!(!lags(&k(9e4), r2, &k(6e4), alpha(6e4), m, &p, h));
+        assert!(lags(&k(6e4), r2, &k(2.0), alpha(2.0), m, &p, h));
+        // At the bound: ‖K̃‖_F = √3 T |r|.
+        let inertia = p.min() + m * r2 + alpha(6e4) * h * h * k(6e4).norm();
+        let t_bound = LAG_RATIO * inertia / (h * h * 3f64.sqrt() * 0.05);
+        assert!(!lags(&k(t_bound * (1.0 - 1e-9)), r2, &k(6e4), alpha(6e4), m, &p, h));
+        assert!(lags(&k(t_bound * (1.0 + 1e-9)), r2, &k(6e4), alpha(6e4), m, &p, h));
+    }
+
     #[test]
     fn weight_ramps_between_one_and_two_rho_start() {
         let i = Vector3::new(1.0, 1.0, 1.0);
