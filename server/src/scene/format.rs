@@ -1,6 +1,6 @@
 //! The scene file's syntax: serde types mirroring `scenes/README.md` one to one. Unknown fields are
 //! refused by serde (with their location); meaning (references, ranges, finiteness) is checked by
-//! `build.rs`, which locates its errors through the [`Spanned`] tables.
+//! `build/`, which locates its errors through the [`Spanned`] tables.
 
 use std::collections::BTreeMap;
 

@@ -5,7 +5,7 @@
 //! | file | concept |
 //! |---|---|
 //! | `format.rs` | the file's syntax as serde types (unknown fields refused) |
-//! | `build.rs` | checks and builds: repeats, references, inertia from shapes, errors with locations |
+//! | `build/` | checks and builds, one file per stage (settings, bodies, joints, items, actuators): repeats, references, inertia from shapes, errors with locations |
 //! | `terrain.rs` | terrain shape types (heightfield, stairs, hills, trimesh) and the material table |
 //! | `controls.rs` | actuators, joystick mapping, timeline |
 //! | `signals.rs` | `[[sensor]]`, `[[event]]`, `[[fault]]` → the scene's signals and faults |
