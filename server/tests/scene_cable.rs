@@ -51,12 +51,12 @@ fn invalid_field(text: &str) -> String {
 #[test]
 fn settings_and_a_steel_cable_on_a_drum_build() {
     let text = scene_text(
-        "geometric_stiffness = \"inertial\"\nmax_speed = 20.0\nenergy_margin = 0.05",
+        "geometric_stiffness = \"inertial\"\nmax_speed = 20.0\nenergy_margin = 0.05\nmax_joint_error = 0.002",
         &format!("{CABLE}\nb = \"hook\"\ndrum = \"winch\"\ndrum_radius = 0.5"),
     );
     let s = scene::load_str("t.toml", &text).unwrap();
     assert_eq!(s.world.settings().geometric_stiffness, GeometricStiffness::Inertial);
-    assert_eq!(s.watchdog, WatchdogSettings { max_speed: 20.0, energy_margin: 0.05 });
+    assert_eq!(s.watchdog, WatchdogSettings { max_speed: 20.0, energy_margin: 0.05, max_joint_error: 0.002 });
     let w = &s.world;
     let seg = w.body(w.body_id("rope/0").unwrap()).unwrap();
     assert!((seg.mass() - steel_rope_mass_per_metre(0.02)).abs() < 1e-12, "1 m segments of steel rope");

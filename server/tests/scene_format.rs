@@ -271,7 +271,9 @@ deadzone = 0.1
         let expected = if t < 1.0 - 1e-9 {
             0.0
         } else if t < 3.0 {
-            0.8 * (t - 1.0) / 2.0
+            // The smooth step 3τ² − 2τ³ of the elapsed fraction τ (controls.rs).
+            let tau = (t - 1.0) / 2.0;
+            0.8 * tau * tau * (3.0 - 2.0 * tau)
         } else if t < 4.0 - 1e-9 {
             0.8
         } else {

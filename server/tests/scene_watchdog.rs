@@ -4,8 +4,13 @@
 //! need position projection to hide the whip of its light links under tension, is stable without
 //! it: the joints' geometric stiffness keeps its joint error below 1 mm, where the paper's step as
 //! published (`geometric_stiffness = "off"`) lets the chain fly apart and the watchdog fires.
+//!
+//! Its third check (W3) flags a joint whose anchors part across its locked directions by more than
+//! the scene's `max_joint_error` (default 1 cm) and names the joint, while the free slide of a
+//! prismatic joint is its coordinate and no error.
 
-use pivotsim_server::dynamics::GeometricStiffness;
+use nalgebra::Vector3;
+use pivotsim_server::dynamics::{DEFAULT_MAX_JOINT_ERROR, GeometricStiffness, Instability, Watchdog, World};
 use pivotsim_server::run::{RunOptions, run_scene};
 use pivotsim_server::scene::{self, BUILTIN};
 
@@ -43,4 +48,86 @@ fn hanging_chain_is_stable_without_projection() {
             _ => assert!(sum.stable && sum.max_joint_error_m <= 1e-3 && sum.max_body_speed_mps < 5.0),
         }
     }
+}
+
+/// Moves body `name` of `w` by `d` (a pure translation: every anchor on it moves by `d`).
+fn shift(w: &mut World, name: &str, d: Vector3<f64>) {
+    let id = w.body_id(name).unwrap();
+    let b = w.body(id).unwrap();
+    let (x, q) = (b.position(), b.orientation());
+    w.set_pose(id, x + d, q).unwrap();
+}
+
+/// (W3) on the double pendulum at rest: a lower rod moved by 4 mm (its elbow opens by exactly
+/// that, the shoulder stays shut) is within the default bound; moved 3 cm across, the watchdog
+/// names the elbow and reports the 3 cm; a scene bound of 5 cm lets it pass. Energy and speed stay
+/// quiet throughout (the move is horizontal, the bodies at rest), so only W3 can fire.
+#[test]
+fn watchdog_names_an_open_joint() {
+    let mut s = scene::load("pendulum").unwrap();
+    assert_eq!(s.watchdog.max_joint_error, DEFAULT_MAX_JOINT_ERROR);
+    let mut dog = Watchdog::new(&s.world, s.watchdog);
+    shift(&mut s.world, "lower", Vector3::new(0.0, 0.004, 0.0));
+    let elbow = s.world.joint_id("elbow").unwrap();
+    assert!((s.world.joint_error(elbow).unwrap() - 0.004).abs() < 1e-12);
+    assert!(dog.check(&s.world).is_none(), "4 mm is within 1 cm");
+    shift(&mut s.world, "lower", Vector3::new(0.0, 0.026, 0.0));
+    match dog.check(&s.world) {
+        Some(Instability::JointError { joint, error, bound, .. }) => {
+            assert_eq!(joint, "elbow");
+            assert!((error - 0.03).abs() < 1e-12, "{error}");
+            assert_eq!(bound, 0.01);
+        }
+        other => panic!("expected the elbow's joint error, got {other:?}"),
+    }
+    assert_eq!(dog.count(), 1);
+    assert!(dog.first().unwrap().to_string().contains("joint `elbow` is open by 3.0000e-2 m"));
+    let text = scene::builtin("pendulum").unwrap().text.replace("[scene]", "[scene]\nmax_joint_error = 0.05");
+    let mut s = scene::load_str("pendulum.toml", &text).unwrap();
+    let mut dog = Watchdog::new(&s.world, s.watchdog);
+    shift(&mut s.world, "lower", Vector3::new(0.0, 0.03, 0.0));
+    assert!(dog.check(&s.world).is_none(), "3 cm within a 5 cm bound");
+}
+
+/// A prismatic joint's slide along its axis is its coordinate: 0.5 m of it is no error; 2 cm
+/// across the axis is.
+#[test]
+fn a_prismatic_slide_is_not_a_joint_error() {
+    let text = r#"
+        [scene]
+        name = "slide"
+        gravity = [0, 0, 0]
+        [[body]]
+        name = "carriage"
+        mass = 5.0
+        inertia = [1, 1, 1]
+        position = [0, 0, 1]
+        [[joint]]
+        name = "rail"
+        type = "prismatic"
+        a = "carriage"
+        anchor = [0, 0, 1]
+        axis = [1, 0, 0]
+    "#;
+    let mut s = scene::load_str("slide.toml", text).unwrap();
+    let mut dog = Watchdog::new(&s.world, s.watchdog);
+    shift(&mut s.world, "carriage", Vector3::new(0.5, 0.0, 0.0));
+    assert!(dog.check(&s.world).is_none());
+    shift(&mut s.world, "carriage", Vector3::new(0.0, 0.0, 0.02));
+    let found = dog.check(&s.world);
+    assert!(
+        matches!(&found, Some(Instability::JointError { joint, error, .. }) if joint == "rail" && (error - 0.02).abs() < 1e-12),
+        "{found:?}"
+    );
+}
+
+/// A `break` disables its joint: the parted rope end drifting apart is not watched.
+#[test]
+fn a_broken_joint_is_not_watched() {
+    let mut s = scene::load("pendulum").unwrap();
+    let mut dog = Watchdog::new(&s.world, s.watchdog);
+    let elbow = s.world.joint_id("elbow").unwrap();
+    s.world.set_joint_enabled(elbow, false, false).unwrap();
+    shift(&mut s.world, "lower", Vector3::new(0.0, 0.5, 0.0));
+    assert!(dog.check(&s.world).is_none());
 }

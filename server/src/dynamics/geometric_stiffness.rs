@@ -77,6 +77,29 @@
 //! `tests/dynamics_momentum.rs`) are left exactly as before. Halving `α` on the rig lets it break
 //! again at a mass ratio of 1,000.
 //!
+//! **When the load jumps.** `K̃` comes from the previous step's impulses. At an impact a tension can
+//! jump by orders of magnitude within one step: a crane's hook, its rope slack after the load
+//! landed (180 N), strikes the load and the rope's top links carry 1.2e5 N in the next step. They
+//! are then solved with the inertia of the slack rope, `ρ ≈ 600` against the explicit bound 4, and
+//! turn by 1.2–1.6 rad within the step: the joints open by 0.3 m (the crane's hose burst,
+//! `tests/dynamics_hose_burst.rs`). After each solve the step therefore checks, per dynamic body,
+//! `K̃_new` from the impulses just solved against the inertia the body was solved with,
+//!
+//! ```text
+//!   h² ‖K̃_new‖_F  >  2 (I_min + m r²_max + α h² ‖K̃_used‖_F)                                      (G6)
+//! ```
+//!
+//! (`ρ > 2` on the corrected inertia: half the explicit bound) while the body turns by more than
+//! `h |ω⁺| > 0.1 rad` in the step — the symptom, as the rope's 1.2–1.6 rad above; a grasp whose
+//! squeeze jumps but whose claws barely move is left alone — for bodies whose island's
+//! solve settled (a solve stopped at its cap returns a safe iterate, not the step's forces; chasing
+//! its impulses moved the forwarder's capped grasp). If any body lags, the step
+//! is solved once more — free velocities with `K̃_new`, the same rows, warm-started from the first
+//! solve, the first solve's input work taken back — and the second answer is kept. A load that
+//! changes smoothly does not trigger it (`K̃_new ≈ K̃_used` gives `ρ ≈ ρ_used / (1 + α ρ_used) ≤ 1`
+//! once `α = 1`: the tension must double within a step, more for a body not yet corrected); the
+//! count is [`World::geometric_stiffness_resolves`](super::World::geometric_stiffness_resolves).
+//!
 //! **Cost.** Per joint with linear rows and valid warm impulses: its world geometry and two norms;
 //! per corrected body one 3 × 3 inverse. Nothing
 //! is allocated (one reusable `Vec<Matrix3>` per world).
@@ -181,6 +204,30 @@ pub(crate) fn weight(k: &Matrix3<f64>, r2: f64, mass: f64, principal: &Vector3<f
     (rho / RHO_START - 1.0).clamp(0.0, 1.0)
 }
 
+/// The stiffness ratio on the corrected inertia beyond which a step is solved again (eq. G6): half
+/// the explicit bound 4.
+pub const LAG_RATIO: f64 = 2.0;
+
+/// The turn `h |ω⁺|` (rad) within the step beyond which a lagging body calls for a second solve
+/// (eq. G6): the chord drift `(h ω)² r / 2` of its anchors is then above 0.5 % of its lever arm.
+pub const LAG_TURN: f64 = 0.1;
+
+/// (G6): whether the stiffness `fresh` (lever arms up to `√r2`) from the impulses just solved
+/// outgrows the inertia the body was solved with, `used` at weight `alpha`.
+pub(crate) fn lags(
+    fresh: &Matrix3<f64>,
+    r2: f64,
+    used: &Matrix3<f64>,
+    alpha: f64,
+    mass: f64,
+    principal: &Vector3<f64>,
+    h: f64,
+) -> bool {
+    let h2 = h * h;
+    let inertia = principal.min() + mass * r2 + alpha * h2 * used.norm();
+    inertia > 0.0 && h2 * fresh.norm() > LAG_RATIO * inertia
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -210,6 +257,26 @@ mod tests {
         assert!((ks - ks.transpose()).norm() < 1e-12);
         let gap = bound_stiffness(&r, &f) - ks;
         assert!(gap.symmetric_eigen().eigenvalues.min() > -1e-9, "{gap}");
+    }
+
+    /// (G6) on a 0.5 kg link of 0.1 m (`I_min ≈ 4e-4`) at `h = 1/60`: a tension that holds or grows
+    /// by half does not lag the stiffness it was solved with (α = 1), one that jumps from a slack
+    /// 2 N to 6e4 N does; the bound is `2 (I + m r² + α h² ‖K̃_used‖)` exactly.
+    #[test]
+    fn a_jump_of_the_tension_lags_and_a_steady_one_does_not() {
+        let (m, p, h) = (0.5, Vector3::new(4e-4, 4e-4, 2.5e-5), 1.0 / 60.0);
+        let r2 = 0.05f64 * 0.05;
+        let k = |t: f64| Matrix3::identity() * (t * 0.05);
+        let alpha = |t: f64| weight(&k(t), r2, m, &p, h);
+        assert_eq!(alpha(6e4), 1.0);
+        assert!(!lags(&k(6e4), r2, &k(6e4), alpha(6e4), m, &p, h));
+        assert!(!lags(&k(9e4), r2, &k(6e4), alpha(6e4), m, &p, h));
+        assert!(lags(&k(6e4), r2, &k(2.0), alpha(2.0), m, &p, h));
+        // At the bound: ‖K̃‖_F = √3 T |r|.
+        let inertia = p.min() + m * r2 + alpha(6e4) * h * h * k(6e4).norm();
+        let t_bound = LAG_RATIO * inertia / (h * h * 3f64.sqrt() * 0.05);
+        assert!(!lags(&k(t_bound * (1.0 - 1e-9)), r2, &k(6e4), alpha(6e4), m, &p, h));
+        assert!(lags(&k(t_bound * (1.0 + 1e-9)), r2, &k(6e4), alpha(6e4), m, &p, h));
     }
 
     #[test]

@@ -129,5 +129,5 @@ pub use rows::{ConstraintRow, Jac6, MAX_ROW_BODIES, RowKey, RowKind};
 pub use settings::{GeometricStiffness, WorldSettings};
 pub use shadow::TooManyShadows;
 pub use stats::{IslandStats, MAX_SHADOWS, ShadowSolve};
-pub use watchdog::{Instability, Watchdog, WatchdogSettings};
+pub use watchdog::{DEFAULT_MAX_JOINT_ERROR, Instability, Watchdog, WatchdogSettings};
 pub use world::{JointFramesWorld, JointReaction, World};

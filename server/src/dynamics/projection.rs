@@ -12,10 +12,16 @@
 //! no motors), solve the same kind of MLCP as the velocity step with zero free velocity,
 //!
 //! ```text
-//!   (J⁺ M⁻¹ J⁺ᵀ + C/h²) μ = −β (φ(x⁺) + c λ / h) / h,     μ ∈ [lo, hi],
+//!   (J⁺ M̃⁻¹ J⁺ᵀ + C/h²) μ = −β (φ(x⁺) + c λ / h) / h,     μ ∈ [lo, hi],
 //! ```
 //!
-//! and move the positions by `h M⁻¹ J⁺ᵀ μ` (translation `h δv`, rotation `exp(h δω/2) ⊗ q`). The
+//! and move the positions by `h M̃⁻¹ J⁺ᵀ μ` (translation `h δv`, rotation `exp(h δω/2) ⊗ q`), `M̃` the
+//! velocity step's effective inertia: `Ĩ = I + s 𝟙` where the geometric stiffness raised a loaded
+//! body's inertia (`geometric_stiffness.rs`; `K̃` is isotropic, so `Ĩ` is that at the new
+//! orientation too), `M̃ = M` elsewhere. A Gauss–Newton step weighted by the plain `M` closes the
+//! anchors of light links under a heavy load by turning them — the mode the velocity step had just
+//! stiffened — and breaks the chain it should straighten; weighted by `M̃` its corrections go where
+//! the velocity step's go. The
 //! target `φ = −c λ / h` (λ the velocity step's impulse of the same row) keeps a compliant row at its
 //! spring deflection instead of pulling it rigid; with `c → 0` the target is `φ = 0`. One iteration
 //! is a Gauss–Newton step on the constraint manifold: the residual drops from `O((hω)² r)` to
@@ -37,7 +43,7 @@
 
 use std::time::Instant;
 
-use nalgebra::{UnitQuaternion, Vector3};
+use nalgebra::{Matrix3, UnitQuaternion, Vector3};
 
 use super::assemble::BodyMotion;
 use super::body::RigidBody;
@@ -65,8 +71,16 @@ pub(crate) fn project(
         for (i, b) in bodies.iter().enumerate() {
             let mut m = BodyMotion { dynamic: b.is_dynamic(), inv_mass: b.inv_mass(), ..Default::default() };
             if m.dynamic {
+                // The inertia of the velocity step: raised by the geometric stiffness where it was.
                 let r = ws.q_new[i].to_rotation_matrix().into_inner();
-                m.inv_inertia = r * b.inv_inertia_body() * r.transpose();
+                let s = ws.gs_iso.get(i).copied().unwrap_or(0.0);
+                let inv_b = match s > 0.0 {
+                    true => (b.inertia_body() + Matrix3::identity() * s)
+                        .try_inverse()
+                        .unwrap_or(*b.inv_inertia_body()),
+                    false => *b.inv_inertia_body(),
+                };
+                m.inv_inertia = r * inv_b * r.transpose();
             }
             ws.proj_motion.push(m);
         }

@@ -17,7 +17,10 @@
 //!   4. islands by union–find over rows joining dynamic bodies
 //!   5. per island: A = J M̃⁻¹ Jᵀ + C/h², b = r − J v_free (eq. 2); solve the boxed MLCP (eq. 3)
 //!      warm-started from the previous step's index set and impulses of the same rows
-//!   6. v⁺ = v_free + M̃⁻¹ Jᵀ λ                          (eq. 1, first line)
+//!   6. v⁺ = v_free + M̃⁻¹ Jᵀ λ                          (eq. 1, first line); if the new impulses
+//!      make a body's geometric stiffness outgrow the inertia it was solved with (a tension that
+//!      jumps at an impact: eq. G6 of geometric_stiffness.rs), steps 2, 5 and 6 once more with
+//!      K̃ from the new impulses (same rows, warm from the first solve)
 //!   7. x⁺ = x + h v⁺,   q⁺ = normalize(exp(h ω⁺/2) ⊗ q)  (ω world frame; = q ⊗ exp(h ω_body/2))
 //!   8. optional position projection (projection.rs), then commit
 //! ```
@@ -76,7 +79,7 @@ use super::rows::{ConstraintRow, RowKey, RowKind, Side, WarmRow};
 use super::settings::{GeometricStiffness, WorldSettings};
 use super::shadow::Shadows;
 use super::stats::IslandStats;
-use crate::solver::{IndexState, Mlcp, SolveStats, Solver};
+use crate::solver::{IndexState, Mlcp, SolveStats, SolveStatus, Solver};
 
 /// Reusable buffers of the step.
 #[derive(Debug, Default)]
@@ -120,6 +123,14 @@ pub(crate) struct StepWorkspace {
     pub stiffness: Vec<(Matrix3<f64>, f64)>,
     /// Bodies whose inertia the geometric stiffness raised in the last step.
     pub gs_bodies: usize,
+    /// The isotropic term `α h² ‖K̃‖/√3` each body's inertia was raised by in this step
+    /// (`Ĩ = I + s 𝟙`, world-indexed; 0 where none): the projection uses the same inertia.
+    pub gs_iso: Vec<f64>,
+    /// `K̃` from the impulses just solved (the lag check, `geometric_stiffness.rs` eq. G6).
+    pub stiffness_fresh: Vec<(Matrix3<f64>, f64)>,
+    /// Steps solved a second time because the stiffness lagged the impulses (G6), since the world
+    /// was built.
+    pub gs_resolves: u64,
     /// Work done on the dynamic bodies since the world was built by everything that is not
     /// gravity or a passive joint row (J; see [`World::input_work`](super::World::input_work)).
     pub input_work: f64,
@@ -246,13 +257,28 @@ impl StepWorkspace {
         time: f64,
         step: u64,
     ) {
-        let (h, n) = (settings.timestep, bodies.len());
+        let h = settings.timestep;
         if settings.geometric_stiffness == GeometricStiffness::Off {
             self.stiffness.clear();
         } else {
             geometric_stiffness::accumulate(bodies, joints, &self.warm, step, h, &mut self.stiffness);
         }
+        self.free_motion(settings, bodies, forces, time);
+    }
+
+    /// Step 2 with the stiffness `K̃` in `self.stiffness`: forces, free velocities and effective
+    /// inverse inertias of every body; `v_new`, `w_new` start as the free velocities.
+    fn free_motion(
+        &mut self,
+        settings: &WorldSettings,
+        bodies: &[RigidBody],
+        forces: &[ForceElement],
+        time: f64,
+    ) {
+        let (h, n) = (settings.timestep, bodies.len());
         self.gs_bodies = 0;
+        self.gs_iso.clear();
+        self.gs_iso.resize(n, 0.0);
         self.forces.reset(n);
         for (i, b) in bodies.iter().enumerate() {
             if b.is_dynamic() {
@@ -281,6 +307,8 @@ impl StepWorkspace {
                             gs = k * (alpha * h * h);
                             inv_inertia = inv;
                             self.gs_bodies += 1;
+                            // K̃ is isotropic (`bound_stiffness`): its diagonal is all of it.
+                            self.gs_iso[i] = gs[(0, 0)];
                         }
                     }
                     let drag = match settings.geometric_stiffness {
@@ -309,19 +337,73 @@ impl StepWorkspace {
         self.w_new.extend(self.motion.iter().map(|m| m.w));
     }
 
-    /// Solves island `k` (steps 5–6): assembly, warm start, solve; leaves `v⁺` of the island's
-    /// bodies in `v_new`/`w_new` and the impulses in the warm-start cache.
+    /// Whether the stiffness `K̃` of this step lags the impulses just solved (eq. G6 of
+    /// `geometric_stiffness.rs`): `K̃` from the new impulses (stamp `step + 1`) into
+    /// `stiffness_fresh`, then for every dynamic body whose island's solve settled (converged or
+    /// inexact, not stopped at its cap or budget) `h² ‖K̃_new‖ > 2 (I_min + m r²_max + α h² ‖K̃_used‖)`
+    /// while the body turns by more than `LAG_TURN` within the step.
+    pub fn stiffness_lags(
+        &mut self,
+        settings: &WorldSettings,
+        bodies: &[RigidBody],
+        joints: &[Joint],
+        step: u64,
+    ) -> bool {
+        let h = settings.timestep;
+        geometric_stiffness::accumulate(bodies, joints, &self.warm, step + 1, h, &mut self.stiffness_fresh);
+        // A solve stopped at its cap or budget returns a safe iterate, not the step's forces: its
+        // impulses do not call for a second solve.
+        let settled = |i: usize| {
+            self.islands
+                .island_of(i)
+                .and_then(|k| self.stat_of_island.get(k))
+                .and_then(|&s| self.stats.get(s))
+                .is_some_and(|st| matches!(st.status, SolveStatus::Converged | SolveStatus::Inexact))
+        };
+        bodies.iter().enumerate().filter(|&(i, b)| b.is_dynamic() && settled(i)).any(|(i, b)| {
+            let (used, r2_used) = self.stiffness.get(i).copied().unwrap_or((Matrix3::zeros(), 0.0));
+            let (fresh, r2) = self.stiffness_fresh[i];
+            let p = b.principal_inertia();
+            let alpha = geometric_stiffness::weight(&used, r2_used, b.mass(), &p, h);
+            geometric_stiffness::lags(&fresh, r2, &used, alpha, b.mass(), &p, h)
+                && self.w_new[i].norm() * h > geometric_stiffness::LAG_TURN
+        })
+    }
+
+    /// Solves the step again with `K̃` from the impulses just solved (eq. G6; `stiffness_lags`
+    /// filled it): the input work of the first solve is taken back (`input_work_before`), the free
+    /// motion recomputed, the islands (same rows) solved warm from the first solve's impulses.
+    pub fn resolve_with_fresh_stiffness(
+        &mut self,
+        settings: &WorldSettings,
+        bodies: &[RigidBody],
+        forces: &[ForceElement],
+        time: f64,
+        step: u64,
+        input_work_before: f64,
+    ) -> Result<(), StepError> {
+        std::mem::swap(&mut self.stiffness, &mut self.stiffness_fresh);
+        self.input_work = input_work_before;
+        self.gs_resolves += 1;
+        self.free_motion(settings, bodies, forces, time);
+        self.solve_islands_from(settings, step, step + 1)
+    }
+
+    /// Solves island `k` (steps 5–6): assembly, warm start (the rows' records stamped
+    /// `warm_stamp`), solve; leaves `v⁺` of the island's bodies in `v_new`/`w_new` and the impulses
+    /// in the warm-start cache.
     fn solve_island(
         &mut self,
         settings: &WorldSettings,
         k: usize,
         step: u64,
+        warm_stamp: u64,
         deadline: Option<Instant>,
     ) -> Result<(), StepError> {
         let h = settings.timestep;
         let t = Instant::now();
         self.asm.assemble(k, &self.islands, &self.rows, &self.motion, h);
-        let max_violation = self.load_warm_start(k, step);
+        let max_violation = self.load_warm_start(k, warm_stamp);
         let solved = self.stats.len();
         if self.solvers.len() <= solved {
             self.solvers.push(Solver::new(settings.solver));
@@ -359,7 +441,8 @@ impl StepWorkspace {
     }
 
     /// Fills the assembler's warm start (`lambda0`, `index0`) of island `k` from the rows' records
-    /// of the last step; returns the island's largest position violation `|φ|`.
+    /// stamped `step` (the last step's; a re-solve's: this step's first solve); returns the
+    /// island's largest position violation `|φ|`.
     fn load_warm_start(&mut self, k: usize, step: u64) -> f64 {
         self.asm.lambda0.clear();
         self.asm.index0.clear();
@@ -454,6 +537,16 @@ impl StepWorkspace {
     /// `v_free`); the islands share the time budget of the step's solves (`max_solve_us`). Contact
     /// rows not solved in this step leave the warm-start cache.
     pub fn solve_islands(&mut self, settings: &WorldSettings, step: u64) -> Result<(), StepError> {
+        self.solve_islands_from(settings, step, step)
+    }
+
+    /// [`Self::solve_islands`] warm-started from the records stamped `warm_stamp`.
+    fn solve_islands_from(
+        &mut self,
+        settings: &WorldSettings,
+        step: u64,
+        warm_stamp: u64,
+    ) -> Result<(), StepError> {
         self.stats.clear();
         self.captured.clear();
         self.stat_of_island.clear();
@@ -463,7 +556,7 @@ impl StepWorkspace {
         });
         for k in 0..self.islands.len() {
             if !self.islands.rows(k).is_empty() {
-                self.solve_island(settings, k, step, deadline)?;
+                self.solve_island(settings, k, step, warm_stamp, deadline)?;
             }
         }
         let solved = step + 1;

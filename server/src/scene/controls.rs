@@ -16,8 +16,19 @@
 //! Actuators are applied to the world before every step ([`Controls::apply`]); applying
 //! allocates nothing.
 //!
-//! **Script.** Entries at times `t` set actuator values (with `ramp` > 0: linearly over `ramp`
-//! seconds, from the value at `t`) and fire events: `attach` (latch a disabled joint where the
+//! **Script.** Entries at times `t` set actuator values (with `ramp` > 0: over `ramp` seconds
+//! `T`, from the value `u₀` at `t₀`, by default (`profile = "smooth"`) along the smooth step
+//!
+//! ```text
+//!   u(t) = u₀ + (u₁ − u₀) σ(τ),   σ(τ) = 3τ² − 2τ³,   τ = (t − t₀) / T ∈ [0, 1],
+//! ```
+//!
+//! whose rate `6 (u₁ − u₀) τ (1 − τ) / T` starts and ends at zero and peaks at 1.5 × the mean at
+//! `τ = ½`, with the acceleration bounded by `6 |u₁ − u₀| / T²`: a scripted operator moves a lever
+//! as a person does, never as a step of its rate. A linear ramp of a position actuator's target is
+//! a step of the cylinder's speed — a jolt the load feels: the crane's telescope/luff ramp raised
+//! `hoist-overload` (1.86× static) two steps after it started. `profile = "linear"` keeps
+//! `σ(τ) = τ`) and fire events: `attach` (latch a disabled joint where the
 //! bodies are now) and `detach`. [`Script::advance`] is called with the time of the step about
 //! to be taken.
 
@@ -317,12 +328,25 @@ pub struct ScriptEntry {
     pub set: Vec<(usize, f64)>,
     /// Ramp duration (s; 0: at once).
     pub ramp: f64,
+    /// How the ramp moves (module doc).
+    pub profile: RampProfile,
     /// Event fired at `t`.
     pub event: Option<SceneEvent>,
 }
 
+/// The shape of a scripted ramp (module doc, **Script**).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum RampProfile {
+    /// `σ(τ) = 3τ² − 2τ³`: the rate starts and ends at zero (the default).
+    #[default]
+    Smooth,
+    /// `σ(τ) = τ`: a constant rate from the first step (a step of a position target's speed).
+    Linear,
+}
+
 #[derive(Debug, Clone, Copy, PartialEq)]
 struct Ramp {
+    profile: RampProfile,
     actuator: usize,
     from: f64,
     to: f64,
@@ -376,7 +400,14 @@ impl Script {
                 self.ramps.retain(|r| r.actuator != i);
                 if e.ramp > 0.0 {
                     let from = controls.actuators[i].value;
-                    self.ramps.push(Ramp { actuator: i, from, to, t0: e.t, t1: e.t + e.ramp });
+                    self.ramps.push(Ramp {
+                        profile: e.profile,
+                        actuator: i,
+                        from,
+                        to,
+                        t0: e.t,
+                        t1: e.t + e.ramp,
+                    });
                 } else {
                     // Entries were validated finite at load.
                     let _ = controls.set_index(i, to);
@@ -388,12 +419,21 @@ impl Script {
             self.next += 1;
         }
         for r in &self.ramps {
-            let f = ((t - r.t0) / (r.t1 - r.t0)).clamp(0.0, 1.0);
+            let tau = ((t - r.t0) / (r.t1 - r.t0)).clamp(0.0, 1.0);
+            let f = match r.profile {
+                RampProfile::Smooth => smooth_step(tau),
+                RampProfile::Linear => tau,
+            };
             let _ = controls.set_index(r.actuator, r.from + f * (r.to - r.from));
         }
         self.ramps.retain(|r| t < r.t1);
         Ok(())
     }
+}
+
+/// `σ(τ) = 3τ² − 2τ³` (module doc, **Script**): 0 → 1 with zero slope at both ends.
+fn smooth_step(tau: f64) -> f64 {
+    tau * tau * (3.0 - 2.0 * tau)
 }
 
 /// How a joystick axis drives its actuator.

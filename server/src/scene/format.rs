@@ -1,6 +1,6 @@
 //! The scene file's syntax: serde types mirroring `scenes/README.md` one to one. Unknown fields are
 //! refused by serde (with their location); meaning (references, ranges, finiteness) is checked by
-//! `build.rs`, which locates its errors through the [`Spanned`] tables.
+//! `build/`, which locates its errors through the [`Spanned`] tables.
 
 use std::collections::BTreeMap;
 
@@ -74,6 +74,7 @@ pub(crate) struct SceneSection {
     pub geometric_stiffness: Option<String>,
     pub max_speed: Option<f64>,
     pub energy_margin: Option<f64>,
+    pub max_joint_error: Option<f64>,
 }
 
 /// `[[material]]`: friction of a pair of named materials.
@@ -365,6 +366,7 @@ pub(crate) struct ScriptDef {
     #[serde(default)]
     pub set: BTreeMap<String, f64>,
     pub ramp: Option<f64>,
+    pub profile: Option<String>,
     pub event: Option<String>,
     pub joint: Option<String>,
 }

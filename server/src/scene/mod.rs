@@ -5,7 +5,7 @@
 //! | file | concept |
 //! |---|---|
 //! | `format.rs` | the file's syntax as serde types (unknown fields refused) |
-//! | `build.rs` | checks and builds: repeats, references, inertia from shapes, errors with locations |
+//! | `build/` | checks and builds, one file per stage (settings, bodies, joints, items, actuators): repeats, references, inertia from shapes, errors with locations |
 //! | `terrain.rs` | terrain shape types (heightfield, stairs, hills, trimesh) and the material table |
 //! | `controls.rs` | actuators, joystick mapping, timeline |
 //! | `signals.rs` | `[[sensor]]`, `[[event]]`, `[[fault]]` → the scene's signals and faults |
@@ -52,7 +52,7 @@ use thiserror::Error;
 pub use builtin::{BUILTIN, BuiltinScene, builtin};
 pub use controls::{
     Actuator, ActuatorFault, ActuatorKind, ActuatorTarget, AxisMode, ButtonAction, Controls, InputError,
-    JoyAxis, JoyButton, JoystickError, JoystickMap, Neutral, SceneEvent, Script, ScriptEntry,
+    JoyAxis, JoyButton, JoystickError, JoystickMap, Neutral, RampProfile, SceneEvent, Script, ScriptEntry,
 };
 pub use faults::{Fault, FaultAction, FaultError, FaultRequest, FaultTrigger, Faults, MAX_FAULTS};
 pub use overrides::{OverrideError, SceneOverride};

@@ -28,7 +28,7 @@ use super::ids::{BodyId, CouplingId, ForceId, JointId};
 use super::joint::{Joint, JointBuilder, JointFrames, JointKind};
 use super::motor::{FreeAxis, JointMotor};
 use super::projection::project;
-use super::settings::WorldSettings;
+use super::settings::{GeometricStiffness, WorldSettings};
 use super::step::StepWorkspace;
 
 /// A multibody world.
@@ -100,7 +100,20 @@ impl World {
             &self.forces,
             &mut self.contacts,
         );
+        let input_work_before = ws.input_work;
         ws.solve_islands(settings, self.steps)?;
+        if settings.geometric_stiffness != GeometricStiffness::Off
+            && ws.stiffness_lags(settings, &self.bodies, &self.joints, self.steps)
+        {
+            ws.resolve_with_fresh_stiffness(
+                settings,
+                &self.bodies,
+                &self.forces,
+                self.time,
+                self.steps,
+                input_work_before,
+            )?;
+        }
         ws.integrate(settings, &self.bodies);
         if settings.projection_iterations > 0 {
             project(settings, &self.bodies, &self.joints, ws, self.steps)?;

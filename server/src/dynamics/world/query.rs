@@ -166,6 +166,12 @@ impl World {
         self.ws.gs_bodies
     }
 
+    /// Steps solved a second time since the world was built because a tension jumped beyond what
+    /// the geometric stiffness of the step had assumed (eq. G6 of `geometric_stiffness.rs`).
+    pub fn geometric_stiffness_resolves(&self) -> u64 {
+        self.ws.gs_resolves
+    }
+
     /// Kinetic energy of the dynamic bodies (J).
     pub fn kinetic_energy(&self) -> f64 {
         self.bodies.iter().map(RigidBody::kinetic_energy).sum()
@@ -210,11 +216,30 @@ impl World {
     /// separation across each joint's locked directions (a prismatic or cylindrical joint's slide
     /// is its coordinate, not an error). This is the runner's and the tests' joint error.
     pub fn max_joint_error(&self) -> f64 {
-        self.joints
-            .iter()
-            .filter(|j| j.enabled)
-            .map(|j| self.joint_geometry(j).locked_anchor_error(j.kind))
-            .fold(0.0, f64::max)
+        self.worst_joint_error().map_or(0.0, |(_, e)| e)
+    }
+
+    /// The enabled joint with the largest position error (as [`World::max_joint_error`]) and that
+    /// error (m); `None` without enabled joints. The first of equal errors; NaN wins (a joint whose
+    /// bodies left the finite numbers is the worst). Allocation-free: the watchdog calls it every
+    /// step.
+    pub fn worst_joint_error(&self) -> Option<(JointId, f64)> {
+        let mut worst: Option<(JointId, f64)> = None;
+        for j in self.joints.iter().filter(|j| j.enabled) {
+            let e = self.joint_geometry(j).locked_anchor_error(j.kind);
+            match worst {
+                Some((_, w)) if w.is_nan() || !(e.is_nan() || e > w) => {}
+                _ => worst = Some((j.id, e)),
+            }
+        }
+        worst
+    }
+
+    /// Position error of one joint at the current poses (m; as [`World::max_joint_error`], also for
+    /// a disabled joint); `None` for an unknown joint.
+    pub fn joint_error(&self, id: JointId) -> Option<f64> {
+        let j = self.joints.get(id.index())?;
+        Some(self.joint_geometry(j).locked_anchor_error(j.kind))
     }
 
     fn joint_geometry(&self, j: &Joint) -> JointGeometry {
