@@ -1,6 +1,6 @@
 //! Real-time pacing of the loop: step `k` is due at `t₀ + k h / rtf` ([`step_period`]); a step
 //! that ends after its deadline counts an overrun, and the loop never runs more than
-//! [`MAX_CATCH_UP`] steps behind; and the periodic status line ([`StatusWindow`]).
+//! [`MAX_CATCH_UP`] steps behind; and the periodic status line (`StatusWindow`).
 
 use std::io::IsTerminal;
 use std::sync::atomic::{AtomicBool, Ordering};
