@@ -16,6 +16,11 @@
 //!   load needs less than `τ_c`, the shafts locked (`α = τ_m / (I_a + I_b)`); with a smaller bound it
 //!   slips: `α_a = (τ_m − τ_c) / I_a`, `α_b = τ_c / I_b`, the relative speed growing at their
 //!   difference. Disengaged (bound 0 set live) the driven shaft coasts.
+//! - **A broken axle ends its gear.** A coupling relates joint coordinates; when the driven shaft's
+//!   axle breaks (its hinge disabled, as a `break` fault does) the gear has no coordinate to hold
+//!   and carries no impulse: the freed shaft keeps its spin (no torque acts on it, isotropic
+//!   inertia) and the driving shaft accelerates at `τ_m / I_a` instead of the geared
+//!   `τ_m / (I_a + I_b / ρ²)`.
 
 use nalgebra::{UnitQuaternion, Vector3};
 use pivotsim_server::dynamics::{
@@ -226,4 +231,39 @@ fn clutch_transmits_below_its_bound_and_slips_above() {
         w.step().unwrap();
     }
     assert!((w.joint_speed(b).unwrap() - coast).abs() < 1e-12);
+}
+
+#[test]
+fn gear_pair_lets_go_when_the_driven_axle_breaks() {
+    let (ia, ib, ratio, tau_m) = (0.2, 0.9, 3.0, 4.0);
+    let mut w = World::new(zero_g()).unwrap();
+    let h = w.settings().timestep;
+    let a = shaft(&mut w, "a", Vector3::zeros(), Vector3::x(), ia, None);
+    let b = shaft(&mut w, "b", Vector3::new(0.0, 0.4, 0.0), Vector3::x(), ib, None);
+    w.set_joint_motor(a, Some(JointMotor::velocity(1000.0, tau_m))).unwrap();
+    let g = w.add_coupling(CouplingBuilder::gear("gear", a, b, ratio).compliance(0.0)).unwrap();
+    for _ in 0..30 {
+        w.step().unwrap();
+    }
+    assert!(w.coupling_impulse(g).abs() > 1e-3, "the gear carries the driven shaft's inertia");
+    let rotor_b = w.body_id("b").unwrap();
+    let spin_b = w.body(rotor_b).unwrap().angvel();
+    let wa0 = w.joint_speed(a).unwrap();
+    w.set_joint_enabled(b, false, false).unwrap();
+    for n in 1..=60 {
+        w.step().unwrap();
+        assert_eq!(w.coupling_impulse(g), 0.0, "step {n}: a gear across a broken axle pushed");
+        let wa = w.joint_speed(a).unwrap();
+        let expected = wa0 + tau_m / ia * h * n as f64;
+        assert!((wa - expected).abs() < 1e-9 * expected, "step {n}: ω_a {wa} vs free {expected}");
+        let db = (w.body(rotor_b).unwrap().angvel() - spin_b).norm();
+        assert!(db < 1e-12, "step {n}: the freed shaft's spin changed by {db}");
+    }
+    println!(
+        "broken axle: α_a = {:.9} rad/s² (free τ/I_a = {}, geared {:.6}), freed shaft at {:.6} rad/s",
+        (w.joint_speed(a).unwrap() - wa0) / (60.0 * h),
+        tau_m / ia,
+        tau_m / (ia + ib / ratio / ratio),
+        spin_b.norm()
+    );
 }

@@ -515,7 +515,9 @@ impl StepWorkspace {
             let b = side_of(bodies, v, w, j.body_b);
             push_joint_rows(j, &a, &b, h, &mut self.rows);
         }
-        for c in couplings {
+        // A coupling relates joint coordinates; a disabled (broken) joint has none, so a coupling
+        // takes part only while every joint it names is enabled.
+        for c in couplings.iter().filter(|c| c.terms().iter().all(|&(j, _)| joints[j.index()].enabled)) {
             let sides = |j: &Joint| (side_of(bodies, v, w, Some(j.body_a)), side_of(bodies, v, w, j.body_b));
             push_coupling_row(c, joints, sides, h, &mut self.rows);
         }
