@@ -26,6 +26,9 @@ pub enum SettingsError {
     /// The solve time budget must be finite and positive.
     #[error("max_solve_us must be finite and > 0 (got {0})")]
     InvalidSolveBudget(f64),
+    /// The joint-error guard's tolerance must be finite and ≥ 0.
+    #[error("joint_error_tolerance must be finite and >= 0 m (got {0})")]
+    InvalidJointErrorTolerance(f64),
     /// An iteration count is unreasonably large (> 16).
     #[error("{what} must be at most 16 (got {value})")]
     TooManyIterations {

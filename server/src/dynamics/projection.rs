@@ -50,14 +50,78 @@ use super::body::RigidBody;
 use super::error::StepError;
 use super::ids::BodyId;
 use super::joint::Joint;
-use super::joint_rows::push_joint_rows;
+use super::joint_rows::{JointGeometry, push_joint_rows};
 use super::rows::{RowKey, RowKind, Side};
 use super::settings::WorldSettings;
 use super::step::StepWorkspace;
 use crate::solver::Solver;
 
-/// Runs `settings.projection_iterations` projections on `ws.x_new`, `ws.q_new` (step `step`).
+/// Most projections the joint-error guard runs in one step.
+pub const GUARD_ITERATIONS: usize = 4;
+
+/// Runs `settings.projection_iterations` projections on `ws.x_new`, `ws.q_new` (step `step`), then
+/// the joint-error guard: while the worst joint error at the new poses exceeds
+/// `settings.joint_error_tolerance` and the last projection at least halved it, one more (at most
+/// [`GUARD_ITERATIONS`]). The guard's count is left in `ws.guard_iterations`.
 pub(crate) fn project(
+    settings: &WorldSettings,
+    bodies: &[RigidBody],
+    joints: &[Joint],
+    ws: &mut StepWorkspace,
+    step: u64,
+) -> Result<(), StepError> {
+    for _ in 0..settings.projection_iterations {
+        project_once(settings, bodies, joints, ws, step)?;
+    }
+    ws.guard_iterations = 0;
+    let tol = settings.joint_error_tolerance;
+    if tol > 0.0 {
+        let mut error = worst_new_joint_error(joints, ws);
+        while error > tol && ws.guard_iterations < GUARD_ITERATIONS {
+            project_once(settings, bodies, joints, ws, step)?;
+            ws.guard_iterations += 1;
+            let after = worst_new_joint_error(joints, ws);
+            // A projection that does not halve the error meets what it cannot remove (a compliant
+            // joint's deflection, a limit against a contact): stop rather than spend the budget.
+            let progress = after < 0.75 * error;
+            error = after;
+            if !progress {
+                break;
+            }
+        }
+    }
+    Ok(())
+}
+
+/// The worst locked-anchor error of the enabled joints at the new poses `ws.x_new`, `ws.q_new`
+/// (m; as [`World::max_joint_error`](super::World::max_joint_error) reads it after the step). NaN
+/// counts as infinitely large.
+pub(crate) fn worst_new_joint_error(joints: &[Joint], ws: &StepWorkspace) -> f64 {
+    let mut worst = 0.0f64;
+    for j in joints.iter().filter(|j| j.enabled) {
+        let (a, b) = (new_side(Some(j.body_a), ws), new_side(j.body_b, ws));
+        let e = JointGeometry::new(j, &a, &b).locked_anchor_error(j.kind);
+        worst = if e.is_nan() { f64::INFINITY } else { worst.max(e) };
+    }
+    worst
+}
+
+/// A joint's side at the new poses, at rest (the projection moves positions only).
+fn new_side(id: Option<BodyId>, ws: &StepWorkspace) -> Side {
+    match id {
+        None => Side::world(),
+        Some(id) => Side {
+            index: Some(id.index()),
+            x: ws.x_new[id.index()],
+            q: ws.q_new[id.index()],
+            v: Vector3::zeros(),
+            w: Vector3::zeros(),
+        },
+    }
+}
+
+/// One Gauss–Newton projection of `ws.x_new`, `ws.q_new` onto the joints' position rows.
+fn project_once(
     settings: &WorldSettings,
     bodies: &[RigidBody],
     joints: &[Joint],
@@ -66,7 +130,7 @@ pub(crate) fn project(
 ) -> Result<(), StepError> {
     let h = settings.timestep;
     let n = bodies.len();
-    for _ in 0..settings.projection_iterations {
+    {
         ws.proj_motion.clear();
         for (i, b) in bodies.iter().enumerate() {
             let mut m = BodyMotion { dynamic: b.is_dynamic(), inv_mass: b.inv_mass(), ..Default::default() };
@@ -84,19 +148,9 @@ pub(crate) fn project(
             }
             ws.proj_motion.push(m);
         }
-        let side = |id: Option<BodyId>, ws: &StepWorkspace| match id {
-            None => Side::world(),
-            Some(id) => Side {
-                index: Some(id.index()),
-                x: ws.x_new[id.index()],
-                q: ws.q_new[id.index()],
-                v: Vector3::zeros(),
-                w: Vector3::zeros(),
-            },
-        };
         ws.proj_rows.clear();
         for j in joints.iter().filter(|j| j.enabled) {
-            let (a, b) = (side(Some(j.body_a), ws), side(j.body_b, ws));
+            let (a, b) = (new_side(Some(j.body_a), ws), new_side(j.body_b, ws));
             push_joint_rows(j, &a, &b, h, &mut ws.proj_rows);
         }
         ws.proj_rows.retain(|r| r.kind == RowKind::Position);

@@ -38,6 +38,13 @@ pub struct WorldSettings {
     /// at every step end. 1 removes that error to ~1e-8 m but costs a second solve per step and
     /// dissipates energy at fast rotations (module doc).
     pub projection_iterations: usize,
+    /// The joint-error guard (m; 0 = off): after the velocity step and any `projection_iterations`,
+    /// while the worst locked-anchor error of an enabled joint at the new poses exceeds this, one
+    /// more projection, at most [`GUARD_ITERATIONS`](super::projection::GUARD_ITERATIONS) and only
+    /// while each halves the error (`projection.rs`). Default [`DEFAULT_JOINT_ERROR_TOLERANCE`]: the
+    /// nominal runs of the shipped scenes stay below it, so it costs one error evaluation per step
+    /// there and acts at the events (a part freed by a break, a boom falling after a hose burst).
+    pub joint_error_tolerance: f64,
     /// Geometric stiffness of loaded joints (`geometric_stiffness.rs`): implicit by default (it
     /// only acts on bodies whose joint loads make the step unstable); `Off` is the paper's step as
     /// published.
@@ -53,6 +60,7 @@ impl Default for WorldSettings {
             gyroscopic: true,
             warm_start: true,
             projection_iterations: 0,
+            joint_error_tolerance: DEFAULT_JOINT_ERROR_TOLERANCE,
             geometric_stiffness: GeometricStiffness::Implicit,
         }
     }
@@ -77,9 +85,15 @@ impl WorldSettings {
                 value: self.projection_iterations,
             });
         }
+        if !(self.joint_error_tolerance.is_finite() && self.joint_error_tolerance >= 0.0) {
+            return Err(SettingsError::InvalidJointErrorTolerance(self.joint_error_tolerance));
+        }
         Ok(())
     }
 }
+
+/// Default of [`WorldSettings::joint_error_tolerance`] (m): half a millimetre.
+pub const DEFAULT_JOINT_ERROR_TOLERANCE: f64 = 5e-4;
 
 /// How the geometric stiffness of loaded joints enters the step (`geometric_stiffness.rs`, eq. G3/G4).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]

@@ -116,6 +116,8 @@ pub(crate) struct StepWorkspace {
     pub proj_islands: Islands,
     pub proj_solvers: Vec<Solver>,
     pub proj_motion: Vec<BodyMotion>,
+    /// Projections the joint-error guard ran in the last step (`projection.rs`).
+    pub guard_iterations: usize,
     pub dv: Vec<Vector3<f64>>,
     pub dw: Vec<Vector3<f64>>,
     /// Geometric stiffness `K̃` per body and its largest loaded lever arm squared (world-indexed;

@@ -69,6 +69,7 @@ pub(crate) struct SceneSection {
     pub pgs_sweeps: Option<usize>,
     pub exact_bilateral: Option<bool>,
     pub projection_iterations: Option<usize>,
+    pub joint_error_tolerance: Option<f64>,
     pub warm_start: Option<bool>,
     pub gyroscopic: Option<bool>,
     pub geometric_stiffness: Option<String>,

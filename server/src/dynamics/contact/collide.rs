@@ -105,6 +105,9 @@ pub(crate) struct NarrowPhase {
     /// Each collider's AABB (the union of its parts'), grown by half the margin; `None` if
     /// unbounded (half-space).
     bounds: Vec<Bounds>,
+    /// Each collider's sweep bound of the step, `h (|v| + |ω| R)` (m): no point of it moves
+    /// farther (`R` the farthest corner of its AABB from the body's centre).
+    sweep: Vec<f64>,
     broad: SweepAndPrune,
     /// EPA buffers of the convex–triangle queries, reused (penetrating resting contacts need EPA).
     epa: EPA,
@@ -141,7 +144,10 @@ fn may_touch(
 }
 
 impl NarrowPhase {
-    /// Finds the contact points of all collider pairs at the current poses within `margin`.
+    /// Finds the contact points of all collider pairs at the current poses within `margin`, and
+    /// within the swept margin of a pair that may close faster (module doc of `contact/mod.rs`,
+    /// "Swept margin"; `h` the step).
+    #[allow(clippy::too_many_arguments)]
     pub fn update(
         &mut self,
         colliders: &[Collider],
@@ -150,31 +156,39 @@ impl NarrowPhase {
         joints: &[Joint],
         connected: &HashSet<u32>,
         margin: f64,
+        h: f64,
     ) {
         self.stamp += 1;
         self.points.clear();
-        self.place_parts(colliders, bodies, margin);
+        self.place_parts(colliders, bodies, margin, h);
         self.broad.update(&self.bounds);
         for p in 0..self.broad.pairs().len() {
             let (i, j) = self.broad.pairs()[p];
             let (i, j) = (i as usize, j as usize);
             if may_touch(&colliders[i], &colliders[j], bodies, joints, connected) {
-                self.collider_pair_points(colliders, i, j, mu_of(i, j), margin);
+                let swept = self.sweep[i] + self.sweep[j];
+                let first = self.points.len();
+                self.collider_pair_points(colliders, i, j, mu_of(i, j), margin.max(swept));
+                if swept > margin {
+                    keep_closing_points(&mut self.points, first, bodies, margin, h);
+                }
             }
         }
         let stamp = self.stamp;
         self.pairs.retain(|_, c| c.stamp == stamp);
     }
 
-    /// The world pose of every collider part and each collider's AABB grown by half the margin.
-    fn place_parts(&mut self, colliders: &[Collider], bodies: &[RigidBody], margin: f64) {
+    /// The world pose of every collider part, each collider's sweep bound and its AABB grown by
+    /// half the margin or by its sweep, whichever is larger.
+    fn place_parts(&mut self, colliders: &[Collider], bodies: &[RigidBody], margin: f64, h: f64) {
         self.poses.clear();
         self.first.clear();
         self.bounds.clear();
-        let grow = Vector::splat(0.5 * margin);
+        self.sweep.clear();
         for c in colliders {
             self.first.push(self.poses.len());
-            let body = bodies[c.body.index()].pose();
+            let b = &bodies[c.body.index()];
+            let body = b.pose();
             let (mut lo, mut hi) = (Vector::splat(f64::INFINITY), Vector::splat(f64::NEG_INFINITY));
             for part in &c.parts {
                 let pose = to_pose(&(body * part.local));
@@ -184,6 +198,17 @@ impl NarrowPhase {
                 self.poses.push(pose);
             }
             let bounded = !c.shape.is_unbounded();
+            let sweep = match bounded && b.kind() != BodyKind::Static {
+                true => {
+                    let (lo, hi) = (from_vec(lo) - b.position, from_vec(hi) - b.position);
+                    let reach = lo.abs().sup(&hi.abs()).norm();
+                    let s = h * (b.linvel.norm() + b.angvel.norm() * reach);
+                    if s.is_finite() { s } else { 0.0 }
+                }
+                false => 0.0,
+            };
+            self.sweep.push(sweep);
+            let grow = Vector::splat((0.5 * margin).max(sweep));
             self.bounds.push(bounded.then(|| (from_vec(lo - grow), from_vec(hi + grow))));
         }
     }
@@ -233,6 +258,34 @@ impl NarrowPhase {
             });
         }
     }
+}
+
+/// Of the points from `first` on (one pair's, found within its swept margin), keeps those within
+/// `margin` and those the pair closes on within the step: gap `≤ margin + h · v_c`, `v_c` the
+/// closing speed `−n · (v_B(p) − v_A(p))` at the point. A point the bodies pass by or move away
+/// from is dropped, so a fast part gets no speculative rows beyond what it may hit.
+fn keep_closing_points(
+    points: &mut Vec<ContactPoint>,
+    first: usize,
+    bodies: &[RigidBody],
+    margin: f64,
+    h: f64,
+) {
+    let mut kept = first;
+    for k in first..points.len() {
+        let p = points[k];
+        let keep = p.dist <= margin || {
+            let (ba, bb) = (&bodies[p.a], &bodies[p.b]);
+            let va = ba.linvel + ba.angvel.cross(&(p.pa - ba.position));
+            let vb = bb.linvel + bb.angvel.cross(&(p.pb - bb.position));
+            p.dist <= margin + h * (-p.n.dot(&(vb - va))).max(0.0)
+        };
+        if keep {
+            points[kept] = p;
+            kept += 1;
+        }
+    }
+    points.truncate(kept);
 }
 
 impl PairCache {

@@ -589,6 +589,7 @@ impl ContactSet {
             joints,
             &self.connected,
             self.settings.margin,
+            h,
         );
         rows::push_contact_rows(&mut self.phase.points, bodies, &self.settings, h, rows);
     }

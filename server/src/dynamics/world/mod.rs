@@ -115,7 +115,7 @@ impl World {
             )?;
         }
         ws.integrate(settings, &self.bodies);
-        if settings.projection_iterations > 0 {
+        if settings.projection_iterations > 0 || settings.joint_error_tolerance > 0.0 {
             project(settings, &self.bodies, &self.joints, ws, self.steps)?;
         }
         ws.commit(&mut self.bodies)?;

@@ -212,6 +212,12 @@ impl World {
             .fold(0.0, f64::max)
     }
 
+    /// Position projections the joint-error guard ran in the last step (0 while every joint held
+    /// within [`WorldSettings::joint_error_tolerance`](super::WorldSettings::joint_error_tolerance)).
+    pub fn last_guard_projections(&self) -> usize {
+        self.ws.guard_iterations
+    }
+
     /// Largest position error over all enabled joints at the current poses (m): the anchor
     /// separation across each joint's locked directions (a prismatic or cylindrical joint's slide
     /// is its coordinate, not an error). This is the runner's and the tests' joint error.

@@ -66,6 +66,9 @@ impl Builder<'_> {
         if let Some(n) = sec.projection_iterations {
             settings.projection_iterations = n;
         }
+        if let Some(e) = sec.joint_error_tolerance {
+            settings.joint_error_tolerance = self.non_negative(sspan, "joint_error_tolerance", e)?;
+        }
         if let Some(g) = sec.gyroscopic {
             settings.gyroscopic = g;
         }
