@@ -56,6 +56,7 @@ pub(crate) struct SceneSection {
     pub compliance: Option<f64>,
     pub contact_compliance: Option<f64>,
     pub contact_margin: Option<f64>,
+    pub swept_contacts: Option<bool>,
     pub friction: Option<f64>,
     pub max_pivot_steps: Option<usize>,
     pub max_solve_us: Option<f64>,

@@ -261,9 +261,10 @@ impl NarrowPhase {
 }
 
 /// Of the points from `first` on (one pair's, found within its swept margin), keeps those within
-/// `margin` and those the pair closes on within the step: gap `≤ margin + h · v_c`, `v_c` the
-/// closing speed `−n · (v_B(p) − v_A(p))` at the point. A point the bodies pass by or move away
-/// from is dropped, so a fast part gets no speculative rows beyond what it may hit.
+/// `margin` and those the pair would pass within the step: gap `≤ h · v_c`, `v_c` the closing
+/// speed `−n · (v_B(p) − v_A(p))` at the point. A point the bodies pass by, move away from or
+/// reach only in a later step (then within the margin) is dropped, so a fast part gets no
+/// speculative rows beyond those that keep it from penetrating.
 fn keep_closing_points(
     points: &mut Vec<ContactPoint>,
     first: usize,
@@ -278,7 +279,7 @@ fn keep_closing_points(
             let (ba, bb) = (&bodies[p.a], &bodies[p.b]);
             let va = ba.linvel + ba.angvel.cross(&(p.pa - ba.position));
             let vb = bb.linvel + bb.angvel.cross(&(p.pb - bb.position));
-            p.dist <= margin + h * (-p.n.dot(&(vb - va))).max(0.0)
+            p.dist <= h * (-p.n.dot(&(vb - va)))
         };
         if keep {
             points[kept] = p;

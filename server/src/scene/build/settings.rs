@@ -125,6 +125,13 @@ impl Builder<'_> {
                 .set_contact_settings(cs)
                 .map_err(|e| self.invalid(sspan, "contact_margin", e.to_string()))?;
         }
+        if let Some(b) = sec.swept_contacts {
+            let mut cs = self.world.contact_settings();
+            cs.swept = b;
+            self.world
+                .set_contact_settings(cs)
+                .map_err(|e| self.invalid(sspan, "swept_contacts", e.to_string()))?;
+        }
         Ok(())
     }
 
