@@ -19,12 +19,18 @@
 //! dropout cannot change the physics: the run must be bitwise the nominal one; every sensor's
 //! dropout is the same flag on its channels, tested in `signals_faults.rs`).
 //!
+//! The matrix runs in three variants besides the shipped scenes: every scene with
+//! `projection_iterations = 1` (`projection_1`), and the scenes that carry a load (crane pipe,
+//! offshore module, forklift crate) with the load's mass and inertia ×10 and ×100 (`loads_x10`,
+//! `loads_x100`; the winch's load is its own chain, so it has no load body to scale). Each cell
+//! prints how many steps the joint-error guard projected in and how many were re-run as substeps.
+//!
 //! Known failing cells are listed in [`KNOWN`] with their measured figures and cause; a known cell
 //! that starts to pass must leave the list (the test fails on it), so the list stays true. Each
 //! cell's figures are printed (`-- --nocapture`): worst joint error, fastest body against its bound,
 //! largest energy excess over start + inputs, the watchdog's first finding.
 
-use pivotsim_server::dynamics::{FreeAxis, Instability, Joint, JointRow, Watchdog, World};
+use pivotsim_server::dynamics::{FreeAxis, Instability, Joint, JointRow, Watchdog, World, WorldSettings};
 use pivotsim_server::scene::{self, ActuatorKind, FaultRequest, Scene};
 
 /// Fault moments (s) and how long each run goes on after the fault (s).
@@ -33,13 +39,64 @@ const AFTER: f64 = 10.0;
 /// Joint error bound on unbroken joints (m).
 const JOINT_BOUND: f64 = 1e-3;
 
-/// Cells known to fail today (measured 2026-12-05, after the joint-error guard, the swept contact
-/// margin and couplings ending with their joints): (scene, fault, target, moment, figures and
-/// why; docs/notes/dynamics.md). 1 of 167 cells.
-#[rustfmt::skip]
-const KNOWN: &[(&str, &str, &str, f64, &str)] = &[
-    ("offshore", "hose_burst", "luff", 8.0, "1.18e-1 m (rope/3, 9.60 s), 20.8 m/s, watchdog 2 steps: the falling boom whips the slack rope; its top links turn ~0.8 rad in one step, the velocity step opens rope/3 by 3.5-15 cm and a Gauss-Newton projection cannot close a gap that large (it grows 3.5 -> 5.1 cm); needs substeps in such a step"),
-];
+/// How a scene is run in the matrix: as shipped, with `projection_iterations` set, or with its
+/// load's mass and inertia scaled.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Variant {
+    Shipped,
+    Projection(usize),
+    /// The load body (by name) scaled by the factor.
+    Load(&'static str, f64),
+}
+
+impl Variant {
+    fn label(self) -> String {
+        match self {
+            Variant::Shipped => "shipped".into(),
+            Variant::Projection(n) => format!("projection {n}"),
+            Variant::Load(body, k) => format!("{body} x{k}"),
+        }
+    }
+
+    /// The scene `name` in this variant.
+    fn load(self, name: &str) -> Scene {
+        match self {
+            Variant::Shipped => scene::load(name).unwrap(),
+            Variant::Projection(n) => {
+                let mut s = scene::load(name).unwrap();
+                let settings = WorldSettings { projection_iterations: n, ..*s.world.settings() };
+                s.world.set_settings(settings).unwrap();
+                s
+            }
+            Variant::Load(body, k) => {
+                let path = format!("{}/../scenes/{name}.toml", env!("CARGO_MANIFEST_DIR"));
+                let text = std::fs::read_to_string(&path).unwrap();
+                scene::load_str(&path, &scaled_body(&text, body, k)).unwrap()
+            }
+        }
+    }
+}
+
+/// The scene text with body `body`'s mass and inertia multiplied by `k` (its shapes unchanged:
+/// a denser load of the same size).
+fn scaled_body(text: &str, body: &str, k: f64) -> String {
+    let mut doc: toml_edit::DocumentMut = text.parse().unwrap();
+    let bodies = doc["body"].as_array_of_tables_mut().unwrap();
+    let b = bodies.iter_mut().find(|b| b["name"].as_str() == Some(body)).unwrap();
+    let mass = b["mass"].as_float().unwrap();
+    b["mass"] = toml_edit::value(mass * k);
+    if let Some(inertia) = b.get_mut("inertia").and_then(|i| i.as_array_mut()) {
+        for v in inertia.iter_mut() {
+            *v = (v.as_float().unwrap() * k).into();
+        }
+    }
+    doc.to_string()
+}
+
+/// Cells known to fail today: none (measured 2026-12-05, after the joint-error guard, the swept
+/// contact margin, substeps and couplings ending with their joints; docs/notes/dynamics.md).
+/// (scene, variant label, fault, target, moment, figures and why.)
+const KNOWN: &[(&str, &str, &str, &str, f64, &str)] = &[];
 
 /// One cell's figures.
 #[derive(Debug)]
@@ -47,6 +104,9 @@ struct Cell {
     joint_error: f64,
     /// Worst joint error beyond the joint's elastic deflection (m).
     joint_drift: f64,
+    /// Steps in which the joint-error guard projected, and steps re-run as substeps.
+    guarded: u64,
+    substepped: u64,
     top_speed: f64,
     energy_excess: f64,
     first: Option<Instability>,
@@ -86,8 +146,8 @@ fn worst_drift(w: &World) -> f64 {
 }
 
 /// Runs `name` under its script to `at + AFTER`, requesting `fault` (kind, target) at `at`.
-fn run_cell(name: &str, fault: Option<(&str, &str)>, at: f64) -> Cell {
-    let mut s: Scene = scene::load(name).unwrap();
+fn run_cell(name: &str, variant: Variant, fault: Option<(&str, &str)>, at: f64) -> Cell {
+    let mut s: Scene = variant.load(name);
     let mut dog = Watchdog::new(&s.world, s.watchdog);
     let (e0, w0) = (energy(&s.world), s.world.input_work());
     let h = s.world.settings().timestep;
@@ -95,6 +155,8 @@ fn run_cell(name: &str, fault: Option<(&str, &str)>, at: f64) -> Cell {
     let mut cell = Cell {
         joint_error: 0.0,
         joint_drift: 0.0,
+        guarded: 0,
+        substepped: 0,
         top_speed: 0.0,
         energy_excess: f64::NEG_INFINITY,
         first: None,
@@ -118,6 +180,8 @@ fn run_cell(name: &str, fault: Option<(&str, &str)>, at: f64) -> Cell {
         }
         s.step().unwrap_or_else(|e| panic!("{name} {fault:?} at {at}: t = {}: {e}", s.world.time()));
         let w = &s.world;
+        cell.guarded += (w.last_guard_projections() > 0) as u64;
+        cell.substepped += (w.last_substeps() > 1) as u64;
         let error = w.max_joint_error();
         cell.joint_error = cell.joint_error.max(error);
         cell.joint_drift = cell.joint_drift.max(if error > JOINT_BOUND { worst_drift(w) } else { error });
@@ -157,32 +221,38 @@ fn faults_of(name: &str) -> Vec<(String, String)> {
     out
 }
 
-/// Runs every cell of scene `name` and checks them against the bounds and [`KNOWN`].
-fn matrix(name: &str) {
+/// Runs every cell of scene `name` and checks them against the bounds and [`KNOWN`]: the cells
+/// that break them and are not known, and the known cells that pass.
+fn matrix_failures(name: &str, variant: Variant) -> Vec<String> {
     let t0 = std::time::Instant::now();
     let bound = scene::load(name).unwrap().watchdog.max_speed;
     let mut failures = Vec::new();
     let mut cells = 0;
     for (kind, target) in faults_of(name) {
         for at in MOMENTS {
-            let c = run_cell(name, Some((&kind, &target)), at);
+            let c = run_cell(name, variant, Some((&kind, &target)), at);
             cells += 1;
             let ok = c.flagged == 0 && c.joint_drift <= JOINT_BOUND;
-            let known = KNOWN.iter().find(|k| k.0 == name && k.1 == kind && k.2 == target && k.3 == at);
+            let label = variant.label();
+            let known = KNOWN
+                .iter()
+                .find(|k| k.0 == name && k.1 == label && k.2 == kind && k.3 == target && k.4 == at);
             println!(
-                "| {name} | {kind} `{target}` | {at} s | {:.2e} m ({:.2e} m beyond elastic) | {:.1} m/s (bound {bound}) | {:.3e} J | {} | {}{} |",
+                "| {name} | {label} | {kind} `{target}` | {at} s | {:.2e} m ({:.2e} m beyond elastic) | {:.1} m/s (bound {bound}) | {:.3e} J | guard {} / substeps {} steps | {} | {}{} |",
                 c.joint_error,
                 c.joint_drift,
+                c.guarded,
+                c.substepped,
                 c.top_speed,
                 c.energy_excess,
                 c.first.as_ref().map_or("quiet".to_string(), |i| format!("{} steps, first: {i}", c.flagged)),
                 if ok { "pass" } else { "FAIL" },
-                known.map_or(String::new(), |k| format!(" (known: {})", k.4)),
+                known.map_or(String::new(), |k| format!(" (known: {})", k.5)),
             );
             match (ok, known) {
-                (false, None) => failures.push(format!("{kind} {target} at {at} s")),
+                (false, None) => failures.push(format!("{label}: {kind} {target} at {at} s")),
                 (true, Some(_)) => {
-                    failures.push(format!("{kind} {target} at {at} s passes: remove it from KNOWN"))
+                    failures.push(format!("{label}: {kind} {target} at {at} s passes: remove it from KNOWN"))
                 }
                 _ => {}
             }
@@ -192,11 +262,12 @@ fn matrix(name: &str) {
     let s = scene::load(name).unwrap();
     if let Some(sensor) = s.signals.sensors().first() {
         let at = MOMENTS[0];
-        let nominal = run_cell(name, None, at);
-        let dropped = run_cell(name, Some(("dropout", &sensor.name)), at);
+        let nominal = run_cell(name, variant, None, at);
+        let dropped = run_cell(name, variant, Some(("dropout", &sensor.name)), at);
         cells += 1;
         println!(
-            "| {name} | dropout `{}` | {at} s | same run as nominal: {} |",
+            "| {name} | {} | dropout `{}` | {at} s | same run as nominal: {} |",
+            variant.label(),
             sensor.name,
             dropped.final_positions == nominal.final_positions
         );
@@ -204,41 +275,79 @@ fn matrix(name: &str) {
             failures.push(format!("dropout {} changed the physics", sensor.name));
         }
     }
-    println!("{name}: {cells} cells in {:.1} s", t0.elapsed().as_secs_f64());
-    assert!(failures.is_empty(), "{name}: {failures:#?}");
+    println!("{name} ({}): {cells} cells in {:.1} s", variant.label(), t0.elapsed().as_secs_f64());
+    failures.into_iter().map(|f| format!("{name} {f}")).collect()
+}
+
+/// Runs the matrix of every scene of `names` in `variant`; fails with every scene's failures.
+fn matrix(names: &[&str], variant: Variant) {
+    let failures: Vec<String> = names.iter().flat_map(|name| matrix_failures(name, variant)).collect();
+    assert!(failures.is_empty(), "{failures:#?}");
 }
 
 #[test]
 fn pendulum() {
-    matrix("pendulum");
+    matrix(&["pendulum"], Variant::Shipped);
 }
 
 #[test]
 fn crane() {
-    matrix("crane");
+    matrix(&["crane"], Variant::Shipped);
 }
 
 #[test]
 fn offshore() {
-    matrix("offshore");
+    matrix(&["offshore"], Variant::Shipped);
 }
 
 #[test]
 fn forklift() {
-    matrix("forklift");
+    matrix(&["forklift"], Variant::Shipped);
 }
 
 #[test]
 fn forwarder() {
-    matrix("forwarder");
+    matrix(&["forwarder"], Variant::Shipped);
 }
 
 #[test]
 fn winch() {
-    matrix("winch");
+    matrix(&["winch"], Variant::Shipped);
 }
 
 #[test]
 fn vehicle() {
-    matrix("vehicle");
+    matrix(&["vehicle"], Variant::Shipped);
+}
+
+// The same matrix with one position projection per step (a documented scene setting, on in
+// `vehicle`, `winch` and `pendulum`): nothing it enables may break a scene.
+#[test]
+fn projection_1() {
+    matrix(
+        &["pendulum", "crane", "offshore", "forklift", "forwarder", "vehicle", "winch"],
+        Variant::Projection(1),
+    );
+}
+
+// The scenes that carry a load, with the load 10 and 100 times heavier (same size and shape). The
+// winch has no load body: its chain is what it hauls (50 links of 1 kg on its drum).
+const LOADS: [(&str, &str); 3] = [("crane", "pipe"), ("offshore", "module"), ("forklift", "crate")];
+
+#[test]
+fn loads_x10() {
+    let mut failures = Vec::new();
+    for (name, body) in LOADS {
+        failures.extend(matrix_failures(name, Variant::Load(body, 10.0)));
+    }
+    assert!(failures.is_empty(), "{failures:#?}");
+}
+
+#[test]
+fn loads_x100() {
+    let mut failures = Vec::new();
+    for (name, body) in LOADS {
+        failures.extend(matrix_failures(name, Variant::Load(body, 100.0)));
+    }
+    assert!(failures.is_empty(), "{failures:#?}");
 }

@@ -31,7 +31,7 @@ fn stats_frames_carry_the_watchdog() {
 
     let text = builtin("hanging_chain").unwrap().text.replacen(
         "[scene]",
-        "[scene]\ngeometric_stiffness = \"off\"",
+        "[scene]\ngeometric_stiffness = \"off\"\njoint_error_tolerance = 0.0",
         1,
     );
     let path = temp_file("serve-watchdog-chain_off.toml", &text);

@@ -26,6 +26,9 @@ pub enum SettingsError {
     /// The solve time budget must be finite and positive.
     #[error("max_solve_us must be finite and > 0 (got {0})")]
     InvalidSolveBudget(f64),
+    /// `max_substeps` must be 1 (never) to 64.
+    #[error("max_substeps must be 1 to 64 (got {0})")]
+    InvalidSubsteps(usize),
     /// The joint-error guard's tolerance must be finite and ≥ 0.
     #[error("joint_error_tolerance must be finite and >= 0 m (got {0})")]
     InvalidJointErrorTolerance(f64),

@@ -131,4 +131,5 @@ pub use settings::{DEFAULT_JOINT_ERROR_TOLERANCE, GeometricStiffness, WorldSetti
 pub use shadow::TooManyShadows;
 pub use stats::{IslandStats, MAX_SHADOWS, ShadowSolve};
 pub use watchdog::{DEFAULT_MAX_JOINT_ERROR, Instability, Watchdog, WatchdogSettings};
+pub use world::SUBSTEP_TURN;
 pub use world::{JointFramesWorld, JointReaction, World};

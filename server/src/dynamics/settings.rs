@@ -45,6 +45,11 @@ pub struct WorldSettings {
     /// nominal runs of the shipped scenes stay below it, so it costs one error evaluation per step
     /// there and acts at the events (a part freed by a break, a boom falling after a hose burst).
     pub joint_error_tolerance: f64,
+    /// Most substeps a step may be re-run in (1 = never): when a joint is still open beyond
+    /// `joint_error_tolerance` after the guard and a body turned more than
+    /// [`SUBSTEP_TURN`](super::SUBSTEP_TURN) in the step, the step is re-run as `k` steps of `h/k`
+    /// (`step.rs`, "Substeps"). Default 8.
+    pub max_substeps: usize,
     /// Geometric stiffness of loaded joints (`geometric_stiffness.rs`): implicit by default (it
     /// only acts on bodies whose joint loads make the step unstable); `Off` is the paper's step as
     /// published.
@@ -61,6 +66,7 @@ impl Default for WorldSettings {
             warm_start: true,
             projection_iterations: 0,
             joint_error_tolerance: DEFAULT_JOINT_ERROR_TOLERANCE,
+            max_substeps: 8,
             geometric_stiffness: GeometricStiffness::Implicit,
         }
     }
@@ -84,6 +90,9 @@ impl WorldSettings {
                 what: "projection_iterations",
                 value: self.projection_iterations,
             });
+        }
+        if self.max_substeps == 0 || self.max_substeps > 64 {
+            return Err(SettingsError::InvalidSubsteps(self.max_substeps));
         }
         if !(self.joint_error_tolerance.is_finite() && self.joint_error_tolerance >= 0.0) {
             return Err(SettingsError::InvalidJointErrorTolerance(self.joint_error_tolerance));

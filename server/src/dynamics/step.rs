@@ -22,7 +22,9 @@
 //!      jumps at an impact: eq. G6 of geometric_stiffness.rs), steps 2, 5 and 6 once more with
 //!      K̃ from the new impulses (same rows, warm from the first solve)
 //!   7. x⁺ = x + h v⁺,   q⁺ = normalize(exp(h ω⁺/2) ⊗ q)  (ω world frame; = q ⊗ exp(h ω_body/2))
-//!   8. optional position projection (projection.rs), then commit
+//!   8. position projection (projection.rs): `projection_iterations` of them, then the
+//!      joint-error guard's (while a joint is open beyond `joint_error_tolerance`); then commit,
+//!      or the step re-run as substeps (below)
 //! ```
 //!
 //! Each stage is a method of [`StepWorkspace`] over the world's items: `prepare_bodies` (1–2),
@@ -37,7 +39,23 @@
 //! **Drift.** The rows hold `J(x) v⁺ = −βφ/h`, linearized at the start of the step; integrating a
 //! rotation along its chord leaves an anchor at lever arm `r` off by about `(h|ω|)² r / 2` at the
 //! step's end. The next step removes it (it never accumulates); `projection_iterations > 0` removes
-//! it within the step (`projection.rs`).
+//! it within the step, and the joint-error guard wherever it exceeds `joint_error_tolerance`
+//! (`projection.rs`).
+//!
+//! **Substeps.** A Gauss–Newton projection closes a drift that is small against the lever arms;
+//! when a body turns by `θ = h|ω⁺|` of a large fraction of a radian (a slack rope whipped by a
+//! falling boom: 0.8 rad per step, its joints opened by 3–15 cm) the drift `θ² r / 2` is too large
+//! for it, and the step itself is too coarse for the motion. So when, after the guard, a joint is
+//! still open beyond the tolerance and some body turned more than
+//! [`SUBSTEP_TURN`](super::SUBSTEP_TURN) = 0.25 rad, the step is discarded and re-run from its
+//! start as `k = ⌈θ_max / 0.25⌉` steps of `h/k` (2 ≤ k ≤ `max_substeps`), each with all eight
+//! stages and committed in turn: the drift per substep falls by `k²` overall. Bookkeeping: the
+//! attempt's impulses, an impulse over `h`, are scaled by `1/k` to warm-start the first substep,
+//! and the last substep's by `k` so that the step's impulses read as before (mean force `λ/h`); the
+//! attempt's input work is dropped; the warm-start records are stamped per solve
+//! (`World::solves`), not per step. On an error in a substep the bodies return to the step's start.
+//! The step's statistics are those of the last substep ([`World::last_substeps`](super::World::last_substeps)
+//! tells how many there were).
 //!
 //! **Gyroscopic term.** A free body's angular momentum `L = R I_b ω_b` is constant while `ω`
 //! changes (Euler's equation `I ω̇ + ω × I ω = τ`). With `gyroscopic` on, the torque-free part of the
@@ -118,6 +136,10 @@ pub(crate) struct StepWorkspace {
     pub proj_motion: Vec<BodyMotion>,
     /// Projections the joint-error guard ran in the last step (`projection.rs`).
     pub guard_iterations: usize,
+    /// Substeps of the last step (1: none).
+    pub substeps: usize,
+    /// The bodies' state before a step re-run as substeps: position, orientation, velocities.
+    saved: Vec<(Vector3<f64>, UnitQuaternion<f64>, Vector3<f64>, Vector3<f64>)>,
     pub dv: Vec<Vector3<f64>>,
     pub dw: Vec<Vector3<f64>>,
     /// Geometric stiffness `K̃` per body and its largest loaded lever arm squared (world-indexed;
@@ -590,6 +612,29 @@ impl StepWorkspace {
             if w.is_finite() {
                 self.input_work += w;
             }
+        }
+    }
+
+    /// Multiplies the impulses of every record stamped `stamp` by `factor` (substeps: an impulse
+    /// over `h` read as one over `h/k` and back).
+    pub fn scale_stamped(&mut self, stamp: u64, factor: f64) {
+        let rows = self.warm.iter_mut().flat_map(|w| w.iter_mut());
+        let rows = rows.chain(self.warm_couplings.iter_mut()).chain(self.warm_forces.iter_mut());
+        for w in rows.chain(self.warm_contacts.values_mut()).filter(|w| w.stamp == stamp) {
+            w.lambda *= factor;
+        }
+    }
+
+    /// Keeps the bodies' state (allocation-free once the buffer has grown).
+    pub fn save_bodies(&mut self, bodies: &[RigidBody]) {
+        self.saved.clear();
+        self.saved.extend(bodies.iter().map(|b| (b.position, b.orientation, b.linvel, b.angvel)));
+    }
+
+    /// Puts back the state [`Self::save_bodies`] kept.
+    pub fn restore_bodies(&self, bodies: &mut [RigidBody]) {
+        for (b, &(x, q, v, w)) in bodies.iter_mut().zip(&self.saved) {
+            (b.position, b.orientation, b.linvel, b.angvel) = (x, q, v, w);
         }
     }
 

@@ -71,6 +71,7 @@ pub(crate) struct SceneSection {
     pub exact_bilateral: Option<bool>,
     pub projection_iterations: Option<usize>,
     pub joint_error_tolerance: Option<f64>,
+    pub max_substeps: Option<usize>,
     pub warm_start: Option<bool>,
     pub gyroscopic: Option<bool>,
     pub geometric_stiffness: Option<String>,

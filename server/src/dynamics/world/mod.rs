@@ -27,9 +27,12 @@ use super::force::ForceElement;
 use super::ids::{BodyId, CouplingId, ForceId, JointId};
 use super::joint::{Joint, JointBuilder, JointFrames, JointKind};
 use super::motor::{FreeAxis, JointMotor};
-use super::projection::project;
+use super::projection::{project, worst_new_joint_error};
 use super::settings::{GeometricStiffness, WorldSettings};
 use super::step::StepWorkspace;
+
+/// The turn of a body in one step (rad) beyond which an open joint is resolved by substeps.
+pub const SUBSTEP_TURN: f64 = 0.25;
 
 /// A multibody world.
 #[derive(Debug)]
@@ -45,6 +48,9 @@ pub struct World {
     pub(crate) force_names: Vec<String>,
     pub(crate) time: f64,
     pub(crate) steps: u64,
+    /// Solves taken (the warm-start records' stamp): one per step, `1 + k` for a step re-run as
+    /// `k` substeps (`substeps` in the module doc of `step.rs`).
+    pub(crate) solves: u64,
     pub(crate) ws: StepWorkspace,
     /// Colliders, contact settings and the narrow phase (`contact/`).
     pub(crate) contacts: ContactSet,
@@ -66,6 +72,7 @@ impl World {
             force_names: Vec::new(),
             time: 0.0,
             steps: 0,
+            solves: 0,
             ws: StepWorkspace::default(),
             contacts: ContactSet::default(),
         })
@@ -87,11 +94,52 @@ impl World {
         Ok(())
     }
 
-    /// Advances the world by one time step `h`: the stages of `step.rs` in order (its module doc).
+    /// Advances the world by one time step `h`: the stages of `step.rs` in order (its module doc),
+    /// re-run as substeps where the step turned a body too far to resolve (`step.rs`, "Substeps").
     /// On error the bodies keep their state.
     pub fn step(&mut self) -> Result<(), StepError> {
-        let (settings, ws) = (&self.settings, &mut self.ws);
-        ws.prepare_bodies(settings, &self.bodies, &self.joints, &self.forces, self.time, self.steps);
+        let h = self.settings.timestep;
+        let s = self.solves;
+        let input_work_before = self.ws.input_work;
+        self.ws.substeps = 1;
+        self.stages(self.settings, self.time, s)?;
+        match self.substeps_needed() {
+            None => {
+                self.ws.commit(&mut self.bodies)?;
+                self.solves = s + 1;
+            }
+            Some(k) => {
+                // The attempt's impulses become the first substep's warm start (over h/k), its
+                // input work is dropped; the bodies are kept to restore them on error.
+                self.ws.input_work = input_work_before;
+                self.ws.scale_stamped(s + 1, 1.0 / k as f64);
+                self.ws.save_bodies(&self.bodies);
+                let sub = WorldSettings { timestep: h / k as f64, ..self.settings };
+                for j in 0..k as u64 {
+                    let t = self.time + j as f64 * sub.timestep;
+                    let done = self.stages(sub, t, s + 1 + j).and_then(|()| self.ws.commit(&mut self.bodies));
+                    if let Err(e) = done {
+                        self.ws.restore_bodies(&mut self.bodies);
+                        return Err(e);
+                    }
+                }
+                // The last substep's impulses, over h/k, read as the step's (over h).
+                self.ws.scale_stamped(s + 1 + k as u64, k as f64);
+                self.solves = s + 1 + k as u64;
+                self.ws.substeps = k;
+            }
+        }
+        self.time += h;
+        self.steps += 1;
+        Ok(())
+    }
+
+    /// Steps 1–8 of `step.rs` but the commit, with `settings` (their time step), at `time`, as solve
+    /// `solve` (records stamped `solve` are the last solve's).
+    fn stages(&mut self, settings: WorldSettings, time: f64, solve: u64) -> Result<(), StepError> {
+        let ws = &mut self.ws;
+        let settings = &settings;
+        ws.prepare_bodies(settings, &self.bodies, &self.joints, &self.forces, time, solve);
         ws.push_rows(
             settings.timestep,
             &self.bodies,
@@ -101,27 +149,44 @@ impl World {
             &mut self.contacts,
         );
         let input_work_before = ws.input_work;
-        ws.solve_islands(settings, self.steps)?;
+        ws.solve_islands(settings, solve)?;
         if settings.geometric_stiffness != GeometricStiffness::Off
-            && ws.stiffness_lags(settings, &self.bodies, &self.joints, self.steps)
+            && ws.stiffness_lags(settings, &self.bodies, &self.joints, solve)
         {
             ws.resolve_with_fresh_stiffness(
                 settings,
                 &self.bodies,
                 &self.forces,
-                self.time,
-                self.steps,
+                time,
+                solve,
                 input_work_before,
             )?;
         }
         ws.integrate(settings, &self.bodies);
         if settings.projection_iterations > 0 || settings.joint_error_tolerance > 0.0 {
-            project(settings, &self.bodies, &self.joints, ws, self.steps)?;
+            project(settings, &self.bodies, &self.joints, ws, solve)?;
         }
-        ws.commit(&mut self.bodies)?;
-        self.time += settings.timestep;
-        self.steps += 1;
         Ok(())
+    }
+
+    /// Substeps for the step just taken (not committed): `k = ⌈h |ω⁺|_max / θ⌉` (2 to
+    /// `max_substeps`) when a joint is still open beyond the tolerance after the guard and some
+    /// body turned more than `θ` = [`SUBSTEP_TURN`] rad in the step; `None` otherwise.
+    fn substeps_needed(&self) -> Option<usize> {
+        let settings = &self.settings;
+        let tol = settings.joint_error_tolerance;
+        if settings.max_substeps < 2 || tol <= 0.0 {
+            return None;
+        }
+        let h = settings.timestep;
+        let turn = (0..self.bodies.len())
+            .filter(|&i| self.ws.dynamic[i])
+            .map(|i| h * self.ws.w_new[i].norm())
+            .fold(0.0, f64::max);
+        if !(turn > SUBSTEP_TURN) || worst_new_joint_error(&self.joints, &self.ws) <= tol {
+            return None;
+        }
+        Some(((turn / SUBSTEP_TURN).ceil() as usize).clamp(2, settings.max_substeps))
     }
 
     /// Adds a body.

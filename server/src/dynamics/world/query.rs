@@ -96,7 +96,7 @@ impl World {
     /// The warm-start record of a row if it was solved in the last step.
     pub(super) fn last_step_row(&self, key: RowKey) -> Option<&WarmRow> {
         let w = self.ws.warm_row(key)?;
-        (self.steps > 0 && w.stamp == self.steps).then_some(w)
+        (self.solves > 0 && w.stamp == self.solves).then_some(w)
     }
 
     /// Impulse `λ` (N s or N m s) of a joint row in the last step (0 if the row was not emitted).
@@ -210,6 +210,11 @@ impl World {
             .filter(|j| j.enabled)
             .map(|j| self.joint_geometry(j).anchor_error())
             .fold(0.0, f64::max)
+    }
+
+    /// Substeps the last step was solved in (1: none; `step.rs`, "Substeps").
+    pub fn last_substeps(&self) -> usize {
+        self.ws.substeps
     }
 
     /// Position projections the joint-error guard ran in the last step (0 while every joint held

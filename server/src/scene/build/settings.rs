@@ -69,6 +69,12 @@ impl Builder<'_> {
         if let Some(e) = sec.joint_error_tolerance {
             settings.joint_error_tolerance = self.non_negative(sspan, "joint_error_tolerance", e)?;
         }
+        if let Some(n) = sec.max_substeps {
+            if !(1..=64).contains(&n) {
+                return Err(self.invalid(sspan, "max_substeps", "must be 1 (never) to 64"));
+            }
+            settings.max_substeps = n;
+        }
         if let Some(g) = sec.gyroscopic {
             settings.gyroscopic = g;
         }
