@@ -100,6 +100,9 @@ use super::stats::IslandStats;
 use crate::solver::{IndexState, Mlcp, SolveStats, SolveStatus, Solver};
 
 /// Reusable buffers of the step.
+/// A body's position, orientation, linear and angular velocity.
+type BodyState = (Vector3<f64>, UnitQuaternion<f64>, Vector3<f64>, Vector3<f64>);
+
 #[derive(Debug, Default)]
 pub(crate) struct StepWorkspace {
     pub forces: ForceAccumulator,
@@ -139,7 +142,7 @@ pub(crate) struct StepWorkspace {
     /// Substeps of the last step (1: none).
     pub substeps: usize,
     /// The bodies' state before a step re-run as substeps: position, orientation, velocities.
-    saved: Vec<(Vector3<f64>, UnitQuaternion<f64>, Vector3<f64>, Vector3<f64>)>,
+    saved: Vec<BodyState>,
     pub dv: Vec<Vector3<f64>>,
     pub dw: Vec<Vector3<f64>>,
     /// Geometric stiffness `K̃` per body and its largest loaded lever arm squared (world-indexed;

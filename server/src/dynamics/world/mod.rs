@@ -183,7 +183,8 @@ impl World {
             .filter(|&i| self.ws.dynamic[i])
             .map(|i| h * self.ws.w_new[i].norm())
             .fold(0.0, f64::max);
-        if !(turn > SUBSTEP_TURN) || worst_new_joint_error(&self.joints, &self.ws) <= tol {
+        // `turn` is a max over finite or infinite values (f64::max drops NaN).
+        if turn <= SUBSTEP_TURN || worst_new_joint_error(&self.joints, &self.ws) <= tol {
             return None;
         }
         Some(((turn / SUBSTEP_TURN).ceil() as usize).clamp(2, settings.max_substeps))
