@@ -2,6 +2,7 @@
 //! loader and the transports. The binary `pivotsim-server` is a thin CLI over this library.
 
 pub mod dynamics;
+pub mod fault_matrix;
 pub mod run;
 pub mod scene;
 pub mod serve;

@@ -24,7 +24,10 @@
 //!    built from one description — a heavy load on a light chain, a stack of alternating masses, a
 //!    vehicle body on a hinged arm — over the mass ratio 1e1…1e9: joint drift, penetration, energy,
 //!    time per step, and where each engine breaks.
-//! 8. `README.md` (tables, links to the figures), `report.json` (every number), `steps.csv` (the
+//! 8. **Faults** (`faults.rs`): the fault matrix — every shipped scene × every fault it accepts, at
+//!    two moments — as shipped, with projection, and with its load ×10 and ×100: stable cells, the
+//!    worst joint error and energy excess.
+//! 9. `README.md` (tables, links to the figures), `report.json` (every number), `steps.csv` (the
 //!    per-step series) and the SVG figures in the output directory.
 //!
 //! | file | what |
@@ -37,12 +40,14 @@
 //! | `equal_time.rs` | stage 6 |
 //! | `tight_last.rs` | stage 2: the paper's tight-rows-last ordering against RCM on the warm islands |
 //! | `rapier.rs` | stage 7: the comparison with rapier (feature `rapier`) |
+//! | `faults.rs` | stage 8: the fault matrix |
 //! | `markdown.rs` | `README.md` |
 //! | `plots.rs` | the figures |
 //! | `spread.rs` | min / max / mean / median of a sample |
 
 mod equal_time;
 mod extremes;
+mod faults;
 mod fig4;
 mod islands;
 mod markdown;
@@ -109,6 +114,8 @@ pub struct Report {
     pub equal_time: Vec<equal_time::EqualTime>,
     /// Stage 7 (`None`: built without the `rapier` feature).
     pub rapier: Option<rapier::RapierComparison>,
+    /// Stage 8.
+    pub faults: faults::Faults,
     /// The figures written (file names in the output directory).
     pub figures: Vec<String>,
 }
@@ -132,9 +139,10 @@ pub fn run(cfg: &ReportConfig) -> anyhow::Result<Report> {
     let rapier = Some(rapier::run(&plan, &pb)?);
     #[cfg(not(feature = "rapier"))]
     let rapier = None;
+    let faults = faults::run(&plan, &pb)?;
     pb.finish_and_clear();
     let mut report =
-        Report { machine, scenes, islands, extremes, fig4, equal_time, rapier, figures: Vec::new() };
+        Report { machine, scenes, islands, extremes, fig4, equal_time, rapier, faults, figures: Vec::new() };
     report.figures = plots::write_all(&cfg.out, &report)?;
     report.machine.wall_s = t0.elapsed().as_secs_f64();
     write_outputs(&cfg.out, &report)?;
@@ -222,6 +230,7 @@ mod tests {
             "Warm start",
             "Extremes",
             "## rapier",
+            "## Faults",
         ] {
             assert!(md.contains(heading), "README.md lacks {heading}");
         }
@@ -231,6 +240,10 @@ mod tests {
         assert!(json["scenes"].as_array().is_some_and(|s| !s.is_empty()));
         assert!(json["equal_time"].as_array().is_some_and(|s| !s.is_empty()));
         assert!(json["fig4"]["dense"].as_array().is_some_and(|s| !s.is_empty()));
+        // Tiny mode runs the pendulum's fault cells: every one of them is in the JSON and the table.
+        let cells = json["faults"]["cells"].as_array().expect("fault cells");
+        assert!(!cells.is_empty() && cells.iter().all(|c| c["scene"] == "pendulum"));
+        assert_eq!(json["faults"]["rows"][0]["cells"].as_u64(), Some(cells.len() as u64));
         // The comparison is there exactly when it is built in.
         assert_eq!(json["rapier"]["points"].as_array().is_some_and(|p| !p.is_empty()), rapier::BUILT);
         assert_eq!(md.to_lowercase().contains("where each engine breaks"), rapier::BUILT);

@@ -139,6 +139,7 @@ impl Plan {
         let islands = self.scenes.len();
         let extremes = self.extreme_variants.len() * (self.compliances.len() + self.mass_ratios.len());
         let rapier = if super::rapier::BUILT { 3 * 2 * self.rapier_ratios.len() } else { 0 };
-        (runs + islands + extremes + self.fig4_sizes.len() + self.scenes.len() + rapier) as u64
+        let faults = super::faults::runs(self.mode).len();
+        (runs + islands + extremes + self.fig4_sizes.len() + self.scenes.len() + rapier + faults) as u64
     }
 }
