@@ -182,17 +182,8 @@ fn roles_of_the_shipped_configuration_are_enforced_by_zenoh() {
     assert_eq!(st.inputs.rejected_total(), REFUSED, "an allowed input was counted as refused: {:?}", st.inputs);
 
     // The server's adminspace (on for the count) is closed to peers, the instructor included.
-    let replies = instructor.get("@/**").timeout(Duration::from_millis(500)).wait().unwrap();
-    let own = format!("@/{}/", instructor.zid());
-    let mut admin = Vec::new();
-    while let Ok(Some(r)) = replies.recv_timeout(Duration::from_secs(1)) {
-        if let Ok(s) = r.result() {
-            if !s.key_expr().as_str().starts_with(&own) {
-                admin.push(s.key_expr().to_string());
-            }
-        }
-    }
-    assert!(admin.is_empty(), "a peer read the server's adminspace: {admin:?}");
+    let seen = adminspace_seen(&instructor);
+    assert!(seen.is_empty(), "a peer read the server's adminspace: {seen:?}");
 
     // The instructor steers.
     let r = control(&server, &instructor, 3, msgs::ControlCommand::Pause).expect("a reply");
@@ -244,4 +235,51 @@ fn iceoryx2_resources_of_a_server_are_writable_by_its_user_only() {
     server.stop();
     assert!(checked > 0, "no iceoryx2 resource found to check");
     assert!(bad.is_empty(), "resources open to other users: {bad:?}");
+}
+
+/// What a peer (here the instructor) reads of a server's adminspace: the keys of the replies to
+/// `@/**` that are not its own session's.
+fn adminspace_seen(s: &zenoh::Session) -> Vec<String> {
+    let replies = s.get("@/**").timeout(Duration::from_millis(500)).wait().unwrap();
+    let own = format!("@/{}/", s.zid());
+    let mut seen = Vec::new();
+    while let Ok(Some(r)) = replies.recv_timeout(Duration::from_secs(1)) {
+        if let Ok(sample) = r.result() {
+            if !sample.key_expr().as_str().starts_with(&own) {
+                seen.push(sample.key_expr().to_string());
+            }
+        }
+    }
+    seen
+}
+
+/// The server opens its adminspace (read) to count refused puts. Zenoh's access control applies
+/// to a peer's queries on `@/**` like any other: with the shipped file's default changed to
+/// `allow`, the `adminspace` deny rule alone keeps every peer out (a deny rule wins); without it
+/// the same peer reads the server's whole adminspace (metrics, declarations, links), which shows
+/// the query does reach the server.
+#[test]
+fn the_adminspace_rule_closes_the_servers_adminspace_to_every_peer() {
+    let shipped = std::fs::read_to_string(server_config()).unwrap();
+    let allow = shipped.replace("default_permission: \"deny\"", "default_permission: \"allow\"");
+    assert_ne!(allow, shipped);
+    let without_rule = allow.replace("\"serve\", \"adminspace\"]", "\"serve\"]");
+    assert_ne!(without_rule, allow);
+    for (tag, text, open) in [("acl-admin-rule", allow, false), ("acl-admin-none", without_rule, true)] {
+        let config = temp_file(&format!("{tag}.json5"), &text);
+        let server = Server::start_with("pendulum", tag, move |c| {
+            c.world = "bay2".into();
+            c.iceoryx2 = false;
+            c.zenoh.as_mut().unwrap().config_file = Some(config.clone());
+        });
+        let instructor = session(&server, Some("instructor"));
+        scene(&server, &instructor, Duration::from_secs(5)).expect("the instructor reads the scene");
+        let seen = adminspace_seen(&instructor);
+        server.stop();
+        if open {
+            assert!(seen.iter().any(|k| k.ends_with("/metrics")), "{tag}: {seen:?}");
+        } else {
+            assert!(seen.is_empty(), "{tag}: a peer read the server's adminspace: {seen:?}");
+        }
+    }
 }
