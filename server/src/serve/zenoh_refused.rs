@@ -242,8 +242,10 @@ fn read(session: &zenoh::Session, selector: &str) -> Result<u64, String> {
 mod tests {
     use super::*;
 
-    /// Written after the shape of zenoh-stats 1.10's output (two priorities, a congestion drop,
-    /// a refused query, tx drops), not copied from it.
+    /// Written after the shape of zenoh 1.10's output for 10 refused puts (seen from a test
+    /// server: the `_count` and `_sum` lines, labels `local_id`, `local_whatami`, `priority`,
+    /// `message`, `protocol=""`, `reason`), with samples added that must not count (another
+    /// priority counts; a congestion drop, a refused query and tx drops do not).
     const TEXT: &str = concat!(
         "# HELP zenoh_build Zenoh build version.\n",
         "# TYPE zenoh_build info\n",
@@ -251,14 +253,14 @@ mod tests {
         "# HELP zenoh_rx_network_message_dropped_payload_bytes Histogram.\n",
         "# TYPE zenoh_rx_network_message_dropped_payload_bytes histogram\n",
         "# UNIT zenoh_rx_network_message_dropped_payload_bytes bytes\n",
-        "zenoh_rx_network_message_dropped_payload_bytes_sum{local_id=\"ab\",local_whatami=\"peer\",priority=\"data\",message=\"put\",reason=\"access-control\"} 480\n",
-        "zenoh_rx_network_message_dropped_payload_bytes_count{local_id=\"ab\",local_whatami=\"peer\",priority=\"data\",message=\"put\",reason=\"access-control\"} 10\n",
-        "zenoh_rx_network_message_dropped_payload_bytes_bucket{local_id=\"ab\",local_whatami=\"peer\",priority=\"data\",message=\"put\",reason=\"access-control\",le=\"+Inf\"} 10\n",
-        "zenoh_rx_network_message_dropped_payload_bytes_count{local_id=\"ab\",local_whatami=\"peer\",priority=\"data_high\",message=\"put\",reason=\"access-control\"} 2\n",
-        "zenoh_rx_network_message_dropped_payload_bytes_count{local_id=\"ab\",local_whatami=\"peer\",priority=\"data\",message=\"put\",reason=\"congestion\"} 7\n",
+        "zenoh_rx_network_message_dropped_payload_bytes_sum{local_id=\"ab\",local_whatami=\"peer\",priority=\"data\",message=\"put\",protocol=\"\",reason=\"access-control\"} 480.0\n",
+        "zenoh_rx_network_message_dropped_payload_bytes_count{local_id=\"ab\",local_whatami=\"peer\",priority=\"data\",message=\"put\",protocol=\"\",reason=\"access-control\"} 10\n",
+        "zenoh_rx_network_message_dropped_payload_bytes_bucket{local_id=\"ab\",local_whatami=\"peer\",priority=\"data\",message=\"put\",protocol=\"\",reason=\"access-control\",le=\"+Inf\"} 10\n",
+        "zenoh_rx_network_message_dropped_payload_bytes_count{local_id=\"ab\",local_whatami=\"peer\",priority=\"data_high\",message=\"put\",protocol=\"\",reason=\"access-control\"} 2\n",
+        "zenoh_rx_network_message_dropped_payload_bytes_count{local_id=\"ab\",local_whatami=\"peer\",priority=\"data\",message=\"put\",protocol=\"\",reason=\"congestion\"} 7\n",
         "zenoh_rx_network_message_dropped_payload_bytes_count{local_id=\"ab\",local_whatami=\"peer\",priority=\"data\",message=\"query\",reason=\"access-control\"} 3\n",
         "# TYPE zenoh_tx_network_message_dropped_payload_bytes histogram\n",
-        "zenoh_tx_network_message_dropped_payload_bytes_count{local_id=\"ab\",local_whatami=\"peer\",priority=\"data\",message=\"put\",reason=\"access-control\"} 5\n",
+        "zenoh_tx_network_message_dropped_payload_bytes_count{local_id=\"ab\",local_whatami=\"peer\",priority=\"data\",message=\"put\",protocol=\"\",reason=\"access-control\"} 5\n",
         "# EOF\n",
     );
 
