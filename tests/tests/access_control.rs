@@ -179,7 +179,12 @@ fn roles_of_the_shipped_configuration_are_enforced_by_zenoh() {
     std::thread::sleep(Duration::from_millis(1200));
     let st = stats(&server, &instructor);
     assert!(st.inputs.accepted >= 5, "bay2's operator was not heard");
-    assert_eq!(st.inputs.rejected_total(), REFUSED, "an allowed input was counted as refused: {:?}", st.inputs);
+    assert_eq!(
+        st.inputs.rejected_total(),
+        REFUSED,
+        "an allowed input was counted as refused: {:?}",
+        st.inputs
+    );
 
     // The server's adminspace (on for the count) is closed to peers, the instructor included.
     let seen = adminspace_seen(&instructor);
@@ -244,10 +249,10 @@ fn adminspace_seen(s: &zenoh::Session) -> Vec<String> {
     let own = format!("@/{}/", s.zid());
     let mut seen = Vec::new();
     while let Ok(Some(r)) = replies.recv_timeout(Duration::from_secs(1)) {
-        if let Ok(sample) = r.result() {
-            if !sample.key_expr().as_str().starts_with(&own) {
-                seen.push(sample.key_expr().to_string());
-            }
+        if let Ok(sample) = r.result()
+            && !sample.key_expr().as_str().starts_with(&own)
+        {
+            seen.push(sample.key_expr().to_string());
         }
     }
     seen
