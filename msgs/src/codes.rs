@@ -148,7 +148,8 @@ coded_enum! {
         Oversize = 5 => "oversize",
         /// Sequence not newer than the last accepted input of the same source.
         Stale = 6 => "stale",
-        /// Anything else (server policy).
+        /// Anything else (server policy): a full server inbox, a joystick frame the mapping could
+        /// not apply, a put refused by the server's Zenoh access control.
         Other = 7 => "other",
         /// An actuator command whose `mode` is not the scene actuator's mode.
         WrongMode = 8 => "wrong-mode",

@@ -1,9 +1,10 @@
 //! The shipped access-control configuration (`deploy/zenoh/server-acl.json5`) on a live server
 //! over Zenoh on loopback, world `bay2`, only configuration changed: a peer without credentials
 //! cannot reach the server; an observer reads the scene but its control request is refused (Zenoh
-//! ends the query at once without a reply, and the world is not paused); `operator-bay1`'s input for `bay2` (another machine) is
-//! refused and never applied, `operator-bay2`'s is; the instructor pauses and steps the world.
-//! Every wait is bounded.
+//! ends the query at once without a reply, and the world is not paused); `operator-bay1`'s inputs
+//! for `bay2` (another machine) are refused, never applied and counted as `other` in the stats
+//! frame, once each; `operator-bay2`'s are applied; no peer reads the server's adminspace; the
+//! instructor pauses and steps the world. Every wait is bounded.
 
 #![cfg(feature = "live")]
 
@@ -88,6 +89,26 @@ fn stats(server: &Server, s: &zenoh::Session) -> msgs::SolverStats {
     msgs::SolverStats::decode(&sample.payload().to_bytes()).unwrap()
 }
 
+/// Inputs of `operator-bay1` sent to `bay2`.
+const REFUSED: u64 = 10;
+
+/// The first stats frame whose input counters hold at least `n` rejections, waiting up to
+/// `within` (stats frames at 60 Hz); the last frame seen when none does.
+fn counted(server: &Server, s: &zenoh::Session, n: u64, within: Duration) -> msgs::SolverStats {
+    let sub = s.declare_subscriber(server.key(msgs::Topic::Stats)).wait().unwrap();
+    let end = Instant::now() + within;
+    let mut last = None;
+    while let Some(left) = end.checked_duration_since(Instant::now()) {
+        let Ok(Some(sample)) = sub.recv_timeout(left) else { break };
+        let st = msgs::SolverStats::decode(&sample.payload().to_bytes()).unwrap();
+        if st.inputs.rejected_total() >= n {
+            return st;
+        }
+        last = Some(st);
+    }
+    last.expect("a stats frame")
+}
+
 /// Puts `n` winch inputs from `s` on `key`, 20 ms apart.
 fn put_inputs(s: &zenoh::Session, key: &str, source: u32, n: u64) {
     let p = s.declare_publisher(key.to_string()).wait().unwrap();
@@ -136,20 +157,38 @@ fn roles_of_the_shipped_configuration_are_enforced_by_zenoh() {
     );
     assert_eq!(stats(&server, &instructor).inputs.accepted, 0);
 
-    // An operator of bay1 drives bay2: refused by the rules, never applied.
+    // An operator of bay1 drives bay2: refused by the rules, never applied, and counted as
+    // `other` (read from Zenoh's access-control drop count within about a second).
     let bay1 = session(&server, Some("operator-bay1"));
     scene(&server, &bay1, Duration::from_secs(5)).expect("an operator reads the scene");
-    put_inputs(&bay1, &key, 11, 10);
-    std::thread::sleep(Duration::from_millis(200));
-    let st = stats(&server, &instructor);
-    assert_eq!((st.inputs.accepted, st.inputs.rejected_total()), (0, 0), "bay1's inputs reached bay2");
+    let t = Instant::now();
+    put_inputs(&bay1, &key, 11, REFUSED);
+    let st = counted(&server, &instructor, REFUSED, Duration::from_secs(5));
+    println!("{REFUSED} refused inputs counted {:?} after the first put", t.elapsed());
+    assert_eq!(st.inputs.accepted, 0, "bay1's inputs reached bay2");
+    assert_eq!(st.inputs.rejected_for(msgs::RejectReason::Other), REFUSED, "{:?}", st.inputs);
+    assert_eq!(st.inputs.rejected_total(), REFUSED, "{:?}", st.inputs);
+    // Counted once: another read of the drop count later adds nothing.
+    std::thread::sleep(Duration::from_millis(1200));
+    assert_eq!(stats(&server, &instructor).inputs.rejected_total(), REFUSED, "counted twice");
 
-    // bay2's own operator drives it.
+    // bay2's own operator drives it; its inputs are not counted as refused.
     let bay2 = session(&server, Some("operator-bay2"));
     scene(&server, &bay2, Duration::from_secs(5)).expect("an operator reads the scene");
     put_inputs(&bay2, &key, 12, 10);
-    std::thread::sleep(Duration::from_millis(200));
-    assert!(stats(&server, &instructor).inputs.accepted >= 5, "bay2's operator was not heard");
+    std::thread::sleep(Duration::from_millis(1200));
+    let st = stats(&server, &instructor);
+    assert!(st.inputs.accepted >= 5, "bay2's operator was not heard");
+    assert_eq!(
+        st.inputs.rejected_total(),
+        REFUSED,
+        "an allowed input was counted as refused: {:?}",
+        st.inputs
+    );
+
+    // The server's adminspace (on for the count) is closed to peers, the instructor included.
+    let seen = adminspace_seen(&instructor);
+    assert!(seen.is_empty(), "a peer read the server's adminspace: {seen:?}");
 
     // The instructor steers.
     let r = control(&server, &instructor, 3, msgs::ControlCommand::Pause).expect("a reply");
@@ -201,4 +240,51 @@ fn iceoryx2_resources_of_a_server_are_writable_by_its_user_only() {
     server.stop();
     assert!(checked > 0, "no iceoryx2 resource found to check");
     assert!(bad.is_empty(), "resources open to other users: {bad:?}");
+}
+
+/// What a peer (here the instructor) reads of a server's adminspace: the keys of the replies to
+/// `@/**` that are not its own session's.
+fn adminspace_seen(s: &zenoh::Session) -> Vec<String> {
+    let replies = s.get("@/**").timeout(Duration::from_millis(500)).wait().unwrap();
+    let own = format!("@/{}/", s.zid());
+    let mut seen = Vec::new();
+    while let Ok(Some(r)) = replies.recv_timeout(Duration::from_secs(1)) {
+        if let Ok(sample) = r.result()
+            && !sample.key_expr().as_str().starts_with(&own)
+        {
+            seen.push(sample.key_expr().to_string());
+        }
+    }
+    seen
+}
+
+/// The server opens its adminspace (read) to count refused puts. Zenoh's access control applies
+/// to a peer's queries on `@/**` like any other: with the shipped file's default changed to
+/// `allow`, the `adminspace` deny rule alone keeps every peer out (a deny rule wins); without it
+/// the same peer reads the server's whole adminspace (metrics, declarations, links), which shows
+/// the query does reach the server.
+#[test]
+fn the_adminspace_rule_closes_the_servers_adminspace_to_every_peer() {
+    let shipped = std::fs::read_to_string(server_config()).unwrap();
+    let allow = shipped.replace("default_permission: \"deny\"", "default_permission: \"allow\"");
+    assert_ne!(allow, shipped);
+    let without_rule = allow.replace("\"serve\", \"adminspace\"]", "\"serve\"]");
+    assert_ne!(without_rule, allow);
+    for (tag, text, open) in [("acl-admin-rule", allow, false), ("acl-admin-none", without_rule, true)] {
+        let config = temp_file(&format!("{tag}.json5"), &text);
+        let server = Server::start_with("pendulum", tag, move |c| {
+            c.world = "bay2".into();
+            c.iceoryx2 = false;
+            c.zenoh.as_mut().unwrap().config_file = Some(config.clone());
+        });
+        let instructor = session(&server, Some("instructor"));
+        scene(&server, &instructor, Duration::from_secs(5)).expect("the instructor reads the scene");
+        let seen = adminspace_seen(&instructor);
+        server.stop();
+        if open {
+            assert!(seen.iter().any(|k| k.ends_with("/metrics")), "{tag}: {seen:?}");
+        } else {
+            assert!(seen.is_empty(), "{tag}: a peer read the server's adminspace: {seen:?}");
+        }
+    }
 }

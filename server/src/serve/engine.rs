@@ -275,6 +275,13 @@ impl Engine {
         self.health.reject(msgs::RejectReason::Other);
     }
 
+    /// Counts `n` inputs refused before they reached the engine (Zenoh's access control), as
+    /// `other`.
+    pub fn count_refused(&mut self, n: u64) {
+        let c = &mut self.health.rejected[msgs::RejectReason::Other.code() as usize];
+        *c = c.saturating_add(n);
+    }
+
     /// The server state as a control reply reports it.
     pub fn status(&self) -> Status {
         Status {

@@ -11,6 +11,7 @@
 //! | `pacing.rs` | real-time pacing and the status line |
 //! | `describe.rs` | the scene description for renderers and consoles |
 //! | `zenoh_io.rs` | Zenoh: publishers, the `cmd/**` subscriber, the `scene` and `control` queryables |
+//! | `zenoh_refused.rs` | Zenoh: counting the puts its access control refuses (adminspace metrics) |
 //! | `wire.rs` | exhaustive conversions of solver variants, statuses and island stats to `msgs` |
 //! | `iox.rs` | iceoryx2: the same frames over shared memory for same-host subscribers, and inputs |
 //!
@@ -38,6 +39,8 @@ pub mod transport;
 pub mod wire;
 #[cfg(feature = "zenoh")]
 pub mod zenoh_io;
+#[cfg(feature = "zenoh")]
+pub mod zenoh_refused;
 
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -206,6 +209,9 @@ fn serve_loop(
         while counted_drops < d {
             engine.count_dropped();
             counted_drops += 1;
+        }
+        for t in transports.iter_mut() {
+            engine.count_refused(t.take_refused());
         }
         if described {
             for t in transports.iter_mut() {

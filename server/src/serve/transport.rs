@@ -84,6 +84,11 @@ pub trait Transport {
     fn publish(&mut self, frames: Frames<'_>);
     /// Hands over inputs received since the last call (transports that poll).
     fn poll(&mut self, _inbox: &InboxSender) {}
+    /// Inputs refused before they reached the loop since the last call (Zenoh's access control);
+    /// the loop counts them as `other`. Reading it allocates nothing.
+    fn take_refused(&mut self) -> u64 {
+        0
+    }
     /// The scene description changed (load, reset).
     fn set_description(&mut self, _bytes: &[u8]) {}
     /// A short status for the status line.

@@ -3,7 +3,8 @@
 //! (congestion control *drop*, express: a slow subscriber loses frames, it never slows the
 //! loop), the events publisher `…/events` (below), one subscriber on `…/cmd/**` for every input
 //! topic, and the queryables `…/scene` (the encoded description) and `…/control` (requests
-//! answered by the loop thread).
+//! answered by the loop thread). With access control in the Zenoh configuration, the puts its
+//! rules refuse are counted too (`zenoh_refused.rs`).
 //!
 //! Events (thresholds raised and cleared, faults, refused faults) are not frames: each is sent
 //! once, and a lost one is lost for good. With *drop*, the events frame — the fourth message of a
@@ -30,6 +31,7 @@ use zenoh::query::Queryable;
 
 use super::config::{ServeError, ZenohOptions};
 use super::transport::{ErrorThrottle, Frames, Inbound, InboxSender, Transport};
+use super::zenoh_refused::{self, RefusedPuts};
 
 fn err(e: impl std::fmt::Display) -> ServeError {
     ServeError::Transport { transport: "zenoh", message: e.to_string() }
@@ -136,6 +138,8 @@ impl Drop for EventsSender {
 pub struct ZenohTransport {
     // Declared first: dropped (its queued events sent) while the session is open.
     events: EventsSender,
+    // The access-control count's reader (with access control only): stopped before the session.
+    refused: Option<RefusedPuts>,
     session: zenoh::Session,
     poses: Publisher<'static>,
     stats: Publisher<'static>,
@@ -165,7 +169,9 @@ impl ZenohTransport {
         inbox: InboxSender,
         description: &[u8],
     ) -> Result<ZenohTransport, ServeError> {
-        let session = zenoh::open(config(opts)?).wait().map_err(err)?;
+        let mut zconfig = config(opts)?;
+        let acl = zenoh_refused::enable_adminspace(&mut zconfig).map_err(err)?;
+        let session = zenoh::open(zconfig).wait().map_err(err)?;
         let token = claim_world(&session, world)?;
         let publisher = |topic: msgs::Topic| {
             session
@@ -232,7 +238,12 @@ impl ZenohTransport {
             })
             .wait()
             .map_err(err)?;
+        let refused = match acl {
+            Some(whatami) => Some(RefusedPuts::spawn(session.clone(), &whatami).map_err(err)?),
+            None => None,
+        };
         Ok(ZenohTransport {
+            refused,
             session,
             poses,
             stats,
@@ -265,6 +276,10 @@ impl Transport for ZenohTransport {
         if !frames.events.is_empty() {
             self.events.send(frames.events);
         }
+    }
+
+    fn take_refused(&mut self) -> u64 {
+        self.refused.as_ref().map_or(0, RefusedPuts::take)
     }
 
     fn set_description(&mut self, bytes: &[u8]) {
