@@ -1,6 +1,7 @@
 //! The outer friction loop: at an exact solution of the frozen problem, the globalized coupled
-//! Newton point and the update of the friction bounds, the safeguard after it, and the semismooth
-//! Newton fallback when the outer iteration stalls (module docs of `bpp`, "Friction coupling").
+//! Newton point and the update of the friction bounds, the safeguard after it, the semismooth
+//! Newton fallback when the outer iteration stalls, and the proximal outer iteration when that
+//! fails too (module docs of `bpp`, "Friction coupling", "Proximal outer iteration").
 
 use super::super::{Variant, effective_bounds, natural_residual};
 use super::pivot::Next;
@@ -79,7 +80,9 @@ impl Solver {
                     return Next::Return(true);
                 }
             }
-            if self.opts.prox_outer && self.prox_shift == 0.0 && !self.non_finite {
+            // With steps left (at the paper's cap of 35 the fallback's budget of 60 takes them all,
+            // and the solve ends as it did before this iteration existed).
+            if self.opts.prox_outer && self.prox_shift == 0.0 && !self.non_finite && !self.stop_now() {
                 return Next::Return(self.proximal_outer(variant));
             }
             // Not there within its budget: resume the outer iteration from the best iterate seen
