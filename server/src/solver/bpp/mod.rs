@@ -56,9 +56,10 @@
 //!   fades, and that is where the unregularized outer loop can cycle.
 //! - *The schedule.* `ρ` starts at 1 (`PROX_RHO0`, relative to `D`). A step whose inner solve
 //!   converges (within `PROX_INNER_STEPS` pivot steps; an inner outer loop that stalls fails at
-//!   once) moves `c` and divides `ρ` by 10, so that the iteration turns into the unregularized one,
-//!   with exact coupled Newton points, as soon as the inner problems stay solvable; a step that
-//!   fails keeps `c` and multiplies `ρ` by 4, back towards the contractive range. The best true
+//!   once) moves `c` and multiplies `ρ` by 0.3, so that the iteration turns into the
+//!   unregularized one, with exact coupled Newton points, as soon as the inner problems stay
+//!   solvable; a step that fails keeps `c` and multiplies `ρ` by 4, back towards the contractive
+//!   range. The best true
 //!   iterate is kept. The proximal iteration itself has no proof of convergence (the problem is
 //!   not monotone): that it converges where the outer loop cycled is measured
 //!   (`docs/notes/solver.md`, "Generated-island sweep"), not proven.

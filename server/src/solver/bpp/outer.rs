@@ -286,7 +286,7 @@ impl Solver {
 /// First `ρ` of the proximal outer iteration, relative to the diagonal (`A_ρ = A + ρ D`).
 const PROX_RHO0: f64 = 1.0;
 /// `ρ` after a solved proximal step: times this.
-const PROX_SHRINK: f64 = 0.1;
+const PROX_SHRINK: f64 = 0.3;
 /// `ρ` after a failed proximal step (the inner solve stalled or ran out of steps): times this.
 const PROX_GROW: f64 = 4.0;
 /// The range of `ρ`.
