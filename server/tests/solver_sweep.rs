@@ -12,8 +12,8 @@
 //! scaled by `1 + 0.2 u`, `u` uniform in ±1, and a tenth of its index set released to free):
 //! `ISLANDS` solves per variant.
 //! (Measured in release on the 2-core development machine: 67 s of CPU time, 73–98 s of wall
-//! time beside other builds (load 3–5); all six variants on every island would double it, past
-//! the two minutes this test may take.)
+//! time beside other builds (load 3–5) while 45 solves ran to the cap; 23–31 s since they
+//! converge. All six variants on every island would double it.)
 //!
 //! Every solve must converge within 1,000 pivot steps to a relative natural-map residual ≤ 1e-9,
 //! recomputed here (`solver_common`) from `A`, `b`, the bounds and the friction index at the
