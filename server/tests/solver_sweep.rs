@@ -12,15 +12,15 @@
 //! scaled by `1 + 0.2 u`, `u` uniform in ±1, and a tenth of its index set released to free):
 //! `ISLANDS` solves per variant.
 //! (Measured in release on the 2-core development machine: 67 s of CPU time, 73–98 s of wall
-//! time beside other builds (load 3–5); all six variants on every island would double it, past
-//! the two minutes this test may take.)
+//! time beside other builds (load 3–5) while 45 solves ran to the cap; 23–31 s since they
+//! converge. All six variants on every island would double it.)
 //!
 //! Every solve must converge within 1,000 pivot steps to a relative natural-map residual ≤ 1e-9,
 //! recomputed here (`solver_common`) from `A`, `b`, the bounds and the friction index at the
 //! returned normals, not taken from the solver's statistics. A failure names the island's seed,
 //! its parameters, the variant and the start; `sweep_island(seed)` rebuilds it. The solves listed
-//! in `KNOWN_FAILURES` (3 % of them, a finding of this sweep) must still fail: the list only
-//! shrinks.
+//! in `KNOWN_FAILURES` (none since the proximal outer iteration; 45 before it) must still fail:
+//! the list only shrinks.
 
 mod solver_common;
 
@@ -41,58 +41,12 @@ const MAX_STEPS: usize = 1_000;
 /// Relative natural-map residual every solve must reach.
 const TOL: f64 = 1e-9;
 
-/// Solves that do not converge today (measured 2026-12-05 at `fd7f575`: 45 of 1,440 solves on 10 of
-/// 240 islands; `docs/notes/solver.md`, "Generated-island sweep"): the outer friction iteration
-/// and its semismooth Newton fallback cycle, ending at relative residuals 1.4e-9 … 2.9e-4, with or
-/// without the interior point switch. Listed so that every other solve guards against a change;
-/// one of these that converges fails the test too, so that the list only shrinks.
-const KNOWN_FAILURES: &[(u64, Variant, &str)] = &[
-    (31000, Variant::Downdate, "warm"),
-    (31000, Variant::Full, "warm"),
-    (31000, Variant::Skyline, "warm"),
-    (31018, Variant::Downdate, "cold"),
-    (31018, Variant::Downdate, "warm"),
-    (31018, Variant::Full, "cold"),
-    (31018, Variant::Full, "warm"),
-    (31018, Variant::Skyline, "cold"),
-    (31018, Variant::Skyline, "warm"),
-    (31056, Variant::Incremental, "warm"),
-    (31056, Variant::Skyline, "warm"),
-    (31056, Variant::SkylineRefactor, "warm"),
-    (31070, Variant::Auto, "cold"),
-    (31070, Variant::Auto, "warm"),
-    (31070, Variant::Full, "cold"),
-    (31070, Variant::Full, "warm"),
-    (31070, Variant::Incremental, "cold"),
-    (31070, Variant::Incremental, "warm"),
-    (31089, Variant::Auto, "cold"),
-    (31089, Variant::Downdate, "cold"),
-    (31089, Variant::Full, "cold"),
-    (31137, Variant::Auto, "cold"),
-    (31137, Variant::Auto, "warm"),
-    (31137, Variant::Downdate, "cold"),
-    (31137, Variant::Downdate, "warm"),
-    (31137, Variant::Full, "cold"),
-    (31137, Variant::Full, "warm"),
-    (31142, Variant::Auto, "cold"),
-    (31142, Variant::Auto, "warm"),
-    (31142, Variant::Full, "cold"),
-    (31142, Variant::Full, "warm"),
-    (31142, Variant::Incremental, "cold"),
-    (31142, Variant::Incremental, "warm"),
-    (31154, Variant::Auto, "cold"),
-    (31154, Variant::Full, "cold"),
-    (31154, Variant::Incremental, "cold"),
-    (31199, Variant::Downdate, "cold"),
-    (31199, Variant::Downdate, "warm"),
-    (31199, Variant::Skyline, "cold"),
-    (31199, Variant::Skyline, "warm"),
-    (31199, Variant::SkylineRefactor, "cold"),
-    (31199, Variant::SkylineRefactor, "warm"),
-    (31234, Variant::Downdate, "warm"),
-    (31234, Variant::Full, "warm"),
-    (31234, Variant::Skyline, "warm"),
-];
+/// Solves that do not converge today: none. (Measured 2026-12-05 at `fd7f575`: 45 of 1,440 solves on
+/// 10 of 240 islands, where the outer friction iteration and its semismooth Newton fallback
+/// cycled; every one converges since the proximal outer iteration takes over from a failed
+/// fallback — `docs/notes/solver.md`, "Generated-island sweep".) A solve listed here must still
+/// fail, so that the list only shrinks.
+const KNOWN_FAILURES: &[(u64, Variant, &str)] = &[];
 
 /// One solve's outcome, for the failure list and the summary.
 struct Outcome {

@@ -62,6 +62,7 @@ pub(crate) struct SceneSection {
     pub max_solve_us: Option<f64>,
     pub newton_first: Option<bool>,
     pub safeguard_after_update: Option<bool>,
+    pub prox_outer: Option<bool>,
     pub murty_after: Option<usize>,
     pub ipm_after: Option<usize>,
     pub ipm_cold_after: Option<usize>,

@@ -32,6 +32,9 @@ impl Builder<'_> {
         if let Some(b) = sec.safeguard_after_update {
             settings.solver.safeguard_after_update = b;
         }
+        if let Some(b) = sec.prox_outer {
+            settings.solver.prox_outer = b;
+        }
         if let Some(n) = sec.murty_after {
             settings.solver.murty_after = n;
         }

@@ -31,7 +31,38 @@
 //! semismooth Newton method on the whole natural map takes over from the best iterate for a budget
 //! of steps, after which the outer iteration resumes with block pivots. Every iterate is judged by
 //! the natural-map residual against the bounds at its own normal impulses. The outer loop has no
-//! proof of convergence, and it can cycle (`docs/notes/solver.md`, "Generated-island sweep").
+//! proof of convergence, and it can cycle (`docs/notes/solver.md`, "Generated-island sweep"):
+//! when the Newton fallback fails too, the proximal outer iteration below takes over
+//! ([`SolverOptions::prox_outer`]).
+//!
+//! **Proximal outer iteration** (`outer.rs`). The friction-coupled problem is a quasi-variational
+//! inequality: find `λ ∈ K(λ)` with `r(λ) = λ − P_{K(λ)}(λ − (Aλ − b)) = 0`, where `K(λ)` is the
+//! box whose friction rows are `[−μ λ_n⁺, μ λ_n⁺]`. With `D = diag A > 0`, a centre `c` and
+//! `ρ > 0`, one proximal step solves the same problem for `A_ρ = A + ρD`, `b_ρ = b + ρDc` — by the
+//! pivoting and its outer friction loop above — and moves the centre to its answer.
+//! - *Fixed points.* At `λ = c` the two problems coincide (`w_ρ = w`). An exact inner answer `λ`
+//!   has the true residual `‖r(λ)‖∞ ≤ ρ ‖D(λ − c)‖∞` (the natural map is 1-Lipschitz in `w`, and
+//!   `w = w_ρ − ρD(λ − c)`).
+//! - *Large `ρ` makes the inner problem well posed and its outer loop a contraction.* Let
+//!   `q = maxᵢ Σ_{j≠i} |Aᵢⱼ| / ((1 + ρ) Aᵢᵢ)`, below 1 once `ρ > maxᵢ Σ_{j≠i} |Aᵢⱼ| / Aᵢᵢ − 1`
+//!   (`A_ρ` strictly diagonally dominant). A solution of the boxed LCP with bounds `(l, h)` is a
+//!   fixed point of `λ ↦ mid(l, h, ((1 + ρ)D)⁻¹(b_ρ − (A − D)λ))`, a contraction with factor `q`
+//!   in `‖·‖∞`; two solutions for bounds `(l, h)` and `(l', h')` therefore satisfy
+//!   `‖λ − λ'‖∞ ≤ max(‖(l, h) − (l', h')‖∞, q ‖λ − λ'‖∞)`, i.e. `‖λ − λ'‖∞ ≤ ‖(l, h) − (l', h')‖∞`.
+//!   Friction bounds frozen at normals `ν` and `ν'` differ by at most `μ_max ‖ν − ν'‖∞`, so the
+//!   outer fixed-point map `ν ↦ λ_n(bounds(ν))` of the inner problem is a contraction with factor
+//!   `μ_max` when `μ_max < 1` (non-expansive at `μ = 1`): the inner problem has exactly one
+//!   solution and the plain outer iteration converges to it linearly. As `ρ → 0` the guarantee
+//!   fades, and that is where the unregularized outer loop can cycle.
+//! - *The schedule.* `ρ` starts at 1 (`PROX_RHO0`, relative to `D`). A step whose inner solve
+//!   converges (within `PROX_INNER_STEPS` pivot steps; an inner outer loop that stalls fails at
+//!   once) moves `c` and multiplies `ρ` by 0.3, so that the iteration turns into the
+//!   unregularized one, with exact coupled Newton points, as soon as the inner problems stay
+//!   solvable; a step that fails keeps `c` and multiplies `ρ` by 4, back towards the contractive
+//!   range. The best true
+//!   iterate is kept. The proximal iteration itself has no proof of convergence (the problem is
+//!   not monotone): that it converges where the outer loop cycled is measured
+//!   (`docs/notes/solver.md`, "Generated-island sweep"), not proven.
 //!
 //! **Interior point switch** (`ipm.rs`, [`SolverOptions::ipm_cold_after`],
 //! [`SolverOptions::ipm_after`]): a solve that has not converged after a few pivot steps runs
@@ -77,7 +108,7 @@
 //! | `options.rs` | [`SolverOptions`], [`Fallback`] |
 //! | `solver.rs` | the [`Solver`] and its buffers; one solve from the permuted problem to the reported answer |
 //! | `pivot.rs` | the pivoting loop: pivot steps, the judgement of each iterate, block pivots, Newton first |
-//! | `outer.rs` | the outer friction loop: coupled Newton point, bound updates, Newton fallback |
+//! | `outer.rs` | the outer friction loop: coupled Newton point, bound updates, Newton fallback, proximal outer iteration |
 //! | `factor.rs` | the factor strategies of [`Variant`] and the `auto` cost model |
 //! | `safeguard.rs` | the active-set and proximal safeguards, semismooth Newton |
 //! | `coupled.rs` | the exact coupled Newton point (GMRES or envelope LU) |

@@ -77,6 +77,10 @@ pub struct SolverOptions {
     /// 0: only the full step, then the exact ratio-test step. Measured in `safeguard.rs`: the
     /// vehicle's geared, boxed rows want 4, redundant contact sets (forwarder) want 0.
     pub projected_arc: usize,
+    /// When the outer friction loop stalls and the semismooth Newton fallback fails too, the
+    /// proximal outer iteration on `A + ρ diag(A)` takes over (module docs of `bpp`, "Proximal
+    /// outer iteration"; measured in `docs/notes/solver.md`).
+    pub prox_outer: bool,
 }
 
 impl Default for SolverOptions {
@@ -106,6 +110,7 @@ impl Default for SolverOptions {
             ipm_after: usize::MAX,
             ipm_cold_after: 3,
             projected_arc: 0,
+            prox_outer: true,
         }
     }
 }

@@ -1,6 +1,7 @@
 //! The outer friction loop: at an exact solution of the frozen problem, the globalized coupled
-//! Newton point and the update of the friction bounds, the safeguard after it, and the semismooth
-//! Newton fallback when the outer iteration stalls (module docs of `bpp`, "Friction coupling").
+//! Newton point and the update of the friction bounds, the safeguard after it, the semismooth
+//! Newton fallback when the outer iteration stalls, and the proximal outer iteration when that
+//! fails too (module docs of `bpp`, "Friction coupling", "Proximal outer iteration").
 
 use super::super::{Variant, effective_bounds, natural_residual};
 use super::pivot::Next;
@@ -67,11 +68,22 @@ impl Solver {
         }
         let safeguarded = self.opts.safeguard_after_update && !progress.block_pivots;
         let stall_limit = if safeguarded { OUTER_STALL_SAFEGUARDED } else { OUTER_STALL };
-        if progress.outer_stall >= stall_limit && self.opts.newton_fallback {
-            self.lam.copy_from_slice(&self.best);
-            self.compute_w();
-            if self.semismooth_newton(variant, NEWTON_BUDGET, false) {
-                return Next::Return(true);
+        if progress.outer_stall >= stall_limit && self.in_prox_outer {
+            // An inner solve of the proximal outer iteration that stalls: its `ρ` is too small.
+            return Next::Return(false);
+        }
+        if progress.outer_stall >= stall_limit && (self.opts.newton_fallback || self.opts.prox_outer) {
+            if self.opts.newton_fallback {
+                self.lam.copy_from_slice(&self.best);
+                self.compute_w();
+                if self.semismooth_newton(variant, NEWTON_BUDGET, false) {
+                    return Next::Return(true);
+                }
+            }
+            // With steps left (at the paper's cap of 35 the fallback's budget of 60 takes them all,
+            // and the solve ends as it did before this iteration existed).
+            if self.opts.prox_outer && self.prox_shift == 0.0 && !self.non_finite && !self.stop_now() {
+                return Next::Return(self.proximal_outer(variant));
             }
             // Not there within its budget: resume the outer iteration from the best iterate seen
             // (Newton's or the outer loop's), with block pivots after its updates from now on
@@ -177,3 +189,108 @@ impl Solver {
         moved
     }
 }
+
+impl Solver {
+    /// The proximal outer iteration (module docs of `bpp`, "Proximal outer iteration"): from the
+    /// best iterate `c`, each outer step solves the friction-coupled problem with
+    /// `A_ρ = A + ρD` (`D = diag A`) and `b_ρ = b + ρDc` — the pivoting with its outer friction
+    /// loop, within `PROX_INNER_STEPS` pivot steps and failing at its first stall — and is judged
+    /// against the true problem. A solved step moves `c` to its answer and shrinks `ρ` by
+    /// `PROX_SHRINK`; a failed one keeps `c` and grows `ρ` by `PROX_GROW`. Returns convergence,
+    /// with `λ`, `w` of the true problem (the best true iterate in `best` either way); leaves `A`,
+    /// `b` and the factor as they were and does not count its factorizations of `A_ρ` as steps.
+    pub(super) fn proximal_outer(&mut self, variant: Variant) -> bool {
+        let m = self.ap.n();
+        self.in_prox_outer = true;
+        self.stats.fallback = true;
+        let px = &mut self.ws.proximal;
+        self.ap.diagonal_into(&mut px.diag0);
+        resize(&mut px.bp0, m);
+        px.bp0.copy_from_slice(&self.bp);
+        resize(&mut px.center, m);
+        px.center.copy_from_slice(&self.best);
+        resize(&mut px.best, m);
+        px.best.copy_from_slice(&self.best);
+        // The inner solves' frozen solutions are not the true problem's (`choose_capped`).
+        resize(&mut px.frozen0, m);
+        px.frozen0.copy_from_slice(&self.ws.safe.frozen);
+        let have_frozen = self.ws.safe.have_frozen;
+        self.lam.copy_from_slice(&self.best);
+        let mut best_true = self.best_res;
+        let mut rho = PROX_RHO0;
+        let mut converged = false;
+        let ipm_at = self.ipm_at;
+        let cap = self.opts.max_steps.min(ipm_at);
+        while !self.stop_now() {
+            self.stats.proximal_iterations += 1;
+            let px = &self.ws.proximal;
+            for i in 0..m {
+                self.tmp[i] = px.diag0[i] * (1.0 + rho);
+                self.bp[i] = px.bp0[i] + rho * px.diag0[i] * px.center[i];
+            }
+            self.ap.set_diagonal(&self.tmp);
+            self.ws.factor.l_valid = false;
+            self.prepare(variant);
+            self.compute_w();
+            self.update_bounds();
+            self.best_res = f64::INFINITY;
+            self.outer_hist = [0.0; OUTER_MEMORY];
+            self.ipm_at = cap.min(self.stats.pivot_steps + PROX_INNER_STEPS);
+            let inner = self.pivoting(variant, true, Progress::default(), true);
+            self.ipm_at = ipm_at;
+            if self.non_finite {
+                break;
+            }
+            // The true `w = w_ρ − ρD(λ − c)`, judged with the bounds at its own normals.
+            let px = &self.ws.proximal;
+            for i in 0..m {
+                self.tmp[i] = self.w[i] - rho * px.diag0[i] * (self.lam[i] - px.center[i]);
+            }
+            let (r, rr) = natural_residual(&self.lam, &self.tmp, &self.lop, &self.hip, &self.fip);
+            if rr < best_true {
+                best_true = rr;
+                self.ws.proximal.best.copy_from_slice(&self.lam);
+            }
+            if rr <= self.opts.tol_rel || r == 0.0 {
+                converged = true;
+                break;
+            }
+            if inner {
+                rho *= PROX_SHRINK;
+                self.ws.proximal.center.copy_from_slice(&self.lam);
+            } else {
+                rho *= PROX_GROW;
+                self.lam.copy_from_slice(&self.ws.proximal.center);
+            }
+            rho = rho.clamp(PROX_RHO_MIN, PROX_RHO_MAX);
+        }
+        // Back to the original problem and its factor.
+        self.ap.set_diagonal(&self.ws.proximal.diag0);
+        self.bp.copy_from_slice(&self.ws.proximal.bp0);
+        self.ws.factor.l_valid = false;
+        self.prepare(variant);
+        self.ws.safe.frozen.copy_from_slice(&self.ws.proximal.frozen0);
+        self.ws.safe.have_frozen = have_frozen;
+        if !converged {
+            self.lam.copy_from_slice(&self.ws.proximal.best);
+        }
+        self.best.copy_from_slice(&self.ws.proximal.best);
+        self.best_res = best_true;
+        self.compute_w();
+        self.update_bounds();
+        self.in_prox_outer = false;
+        converged
+    }
+}
+
+/// First `ρ` of the proximal outer iteration, relative to the diagonal (`A_ρ = A + ρ D`).
+const PROX_RHO0: f64 = 1.0;
+/// `ρ` after a solved proximal step: times this.
+const PROX_SHRINK: f64 = 0.3;
+/// `ρ` after a failed proximal step (the inner solve stalled or ran out of steps): times this.
+const PROX_GROW: f64 = 4.0;
+/// The range of `ρ`.
+const PROX_RHO_MIN: f64 = 1e-12;
+const PROX_RHO_MAX: f64 = 1e4;
+/// Pivot steps one inner solve may take.
+const PROX_INNER_STEPS: usize = 40;

@@ -51,6 +51,8 @@ pub struct Solver {
     pub(super) outer_hist: [f64; OUTER_MEMORY],
     pub(super) needs_prox: bool,
     pub(super) prox_shift: f64,
+    /// Inside the proximal outer iteration (`outer.rs`).
+    pub(super) in_prox_outer: bool,
     /// The residual `(abs, rel)` the pivoting converged at, set where it returns with `λ` and `w`
     /// still that iterate's (the safe answer then needs no second `w = Aλ − b` and residual).
     pub(super) converged_at: Option<(f64, f64)>,
@@ -299,6 +301,7 @@ impl Solver {
         self.needs_prox = false;
         self.converged_at = None;
         self.prox_shift = 0.0;
+        self.in_prox_outer = false;
         resize(&mut self.ws.safe.warm_lam, m);
         resize(&mut self.lam_hat, m);
         resize(&mut self.ws.safe.frozen, m);

@@ -86,6 +86,8 @@ pub(super) struct Proximal {
     pub(super) bp0: Vec<f64>,
     pub(super) center: Vec<f64>,
     pub(super) best: Vec<f64>,
+    /// The frozen answer kept across the proximal outer iteration (`outer.rs`).
+    pub(super) frozen0: Vec<f64>,
 }
 
 /// The warm start and the candidates and scratch of a safe answer (`safe.rs`).
