@@ -29,7 +29,24 @@
 //! same run without the swept margin sinks the hook more than five times deeper.
 
 use pivotsim_server::dynamics::{ContactSettings, Watchdog};
-use pivotsim_server::scene::{self, FaultRequest};
+use pivotsim_server::scene::{self, FaultRequest, Scene};
+
+/// One step of the crane, requesting the hose burst on `luff` first if t = 12 s is reached and it
+/// was not yet (`fired`).
+fn step_with_burst_at_12(s: &mut Scene, fired: &mut bool) {
+    if !*fired && s.world.time() >= 12.0 - 1e-9 {
+        let req = FaultRequest {
+            kind: "hose_burst".into(),
+            target: "luff".into(),
+            tension: None,
+            to: None,
+            ramp: None,
+        };
+        s.request_fault(&req).unwrap();
+        *fired = true;
+    }
+    s.step().unwrap();
+}
 
 #[test]
 fn the_hook_striking_the_landed_pipe_does_not_spin_the_rope() {
@@ -39,18 +56,7 @@ fn the_hook_striking_the_landed_pipe_does_not_spin_the_rope() {
     let (mut spin, mut open) = (0.0f64, 0.0f64);
     let mut fired = false;
     while s.world.time() < 12.77 {
-        if !fired && s.world.time() >= 12.0 - 1e-9 {
-            let req = FaultRequest {
-                kind: "hose_burst".into(),
-                target: "luff".into(),
-                tension: None,
-                to: None,
-                ramp: None,
-            };
-            s.request_fault(&req).unwrap();
-            fired = true;
-        }
-        s.step().unwrap();
+        step_with_burst_at_12(&mut s, &mut fired);
         if s.world.time() >= 12.7 - 1e-9 {
             spin = links.iter().map(|&b| s.world.body(b).unwrap().angvel().norm()).fold(spin, f64::max);
             open = joints.iter().map(|&j| s.world.joint_error(j).unwrap()).fold(open, f64::max);
@@ -91,18 +97,7 @@ fn burst_run(swept: bool) -> (f64, f64, f64, u64) {
     let (mut open, mut sunk, mut speed) = (0.0f64, 0.0f64, 0.0f64);
     let mut fired = false;
     while s.world.time() < 20.0 {
-        if !fired && s.world.time() >= 12.0 - 1e-9 {
-            let req = FaultRequest {
-                kind: "hose_burst".into(),
-                target: "luff".into(),
-                tension: None,
-                to: None,
-                ramp: None,
-            };
-            s.request_fault(&req).unwrap();
-            fired = true;
-        }
-        s.step().unwrap();
+        step_with_burst_at_12(&mut s, &mut fired);
         let w = &s.world;
         open = open.max(w.max_joint_error());
         speed = w.bodies().iter().map(|b| b.linvel().norm()).fold(speed, f64::max);

@@ -15,61 +15,7 @@ use counting_alloc::allocations_during;
 /// Two 10 kg bobs on 1 m arms hinged to the world about y, held horizontal: `arm` by a drive
 /// (velocity actuator), `arm2` by a brake.
 fn pendulums(faults: &str) -> String {
-    format!(
-        r#"
-[scene]
-name = "pendulums"
-[[body]]
-name = "arm"
-mass = 10.0
-inertia = [0.1, 0.1, 0.1]
-position = [1.0, 0, 2.0]
-[[joint]]
-name = "pivot"
-type = "hinge"
-a = "arm"
-anchor = [0, 0, 2.0]
-axis = [0, 1, 0]
-[[body]]
-name = "arm2"
-mass = 10.0
-inertia = [0.1, 0.1, 0.1]
-position = [1.0, 5.0, 2.0]
-[[joint]]
-name = "pivot2"
-type = "hinge"
-a = "arm2"
-anchor = [0, 5.0, 2.0]
-axis = [0, 1, 0]
-[[actuator]]
-name = "drive"
-type = "velocity"
-joints = ["pivot"]
-max_force = 1000.0
-[[actuator]]
-name = "brake"
-type = "brake"
-joints = ["pivot2"]
-max_force = 1000.0
-[[sensor]]
-name = "pivot"
-type = "joint"
-joint = "pivot"
-[[sensor]]
-name = "brake"
-type = "drum"
-joint = "pivot2"
-[[sensor]]
-name = "load"
-type = "tension"
-joint = "pivot"
-[[event]]
-name = "drive-loaded"
-channel = "load/tension"
-above = 1.0
-{faults}
-"#
-    )
+    format!("{}{faults}\n", include_str!("support/scenes/pendulums.toml"))
 }
 
 fn load(text: &str) -> Scene {
@@ -225,81 +171,7 @@ fn bad_declarations_are_located_errors() {
 
 #[test]
 fn sensors_evaluate_without_allocating() {
-    let text = r#"
-[scene]
-name = "all-sensors"
-[[body]]
-name = "ground"
-kind = "static"
-[[body.shape]]
-type = "plane"
-[[body]]
-name = "base"
-mass = 100.0
-position = [0, 0, 0.25]
-[[body.shape]]
-type = "box"
-size = [1.0, 1.0, 0.5]
-[[body]]
-name = "slider"
-mass = 10.0
-position = [0, 0, 1.0]
-[[body.shape]]
-type = "ball"
-radius = 0.1
-[[joint]]
-name = "cyl"
-type = "prismatic"
-a = "slider"
-b = "base"
-anchor = [0, 0, 1.0]
-axis = [0, 0, 1]
-[[body]]
-name = "load"
-mass = 50.0
-inertia = [1.0, 1.0, 1.0]
-position = [3, 0, 2.5]
-[[cable]]
-name = "rope"
-start = [3, 0, 6]
-direction = [0, 0, -1]
-length = 3.0
-segments = 6
-diameter = 0.02
-b = "load"
-[[sensor]]
-name = "j"
-type = "joint"
-joint = "cyl"
-[[sensor]]
-name = "c"
-type = "cylinder"
-joint = "cyl"
-[[sensor]]
-name = "t"
-type = "tension"
-joint = "rope/end"
-[[sensor]]
-name = "rope"
-type = "cable"
-cable = "rope"
-[[sensor]]
-name = "pads"
-type = "contact_sum"
-bodies = ["base"]
-[[sensor]]
-name = "lmi"
-type = "tipping"
-bodies = ["base", "slider"]
-[[sensor]]
-name = "pts"
-type = "contacts"
-bodies = ["base"]
-[[event]]
-name = "heavy"
-channel = "rope/max"
-above = 100.0
-"#;
+    let text = include_str!("support/scenes/all_sensors.toml");
     let mut s = scene::load_str("alloc.toml", text).unwrap();
     for _ in 0..5 {
         s.step().unwrap();

@@ -17,28 +17,7 @@ fn load(text: &str) -> Scene {
 /// (0 the top, 10 the hook) is `g (m_load + (10 − k) m_seg)`.
 #[test]
 fn hanging_load_rope_tension_is_the_weight_below_every_joint() {
-    let text = r#"
-[scene]
-name = "hang"
-[[body]]
-name = "load"
-mass = 2000.0
-inertia = [300.0, 300.0, 300.0]
-position = [0, 0, 4.5]
-[[cable]]
-name = "rope"
-start = [0, 0, 10]
-direction = [0, 0, -1]
-length = 5.0
-segments = 10
-diameter = 0.03
-mass = 20.0
-b = "load"
-[[sensor]]
-name = "hoist"
-type = "cable"
-cable = "rope"
-"#;
+    let text = include_str!("support/scenes/hanging_load.toml");
     let mut s = load(text);
     let (m_load, m_seg, n) = (2000.0, 2.0, 10usize);
     let mut worst: f64 = 0.0;
@@ -63,47 +42,7 @@ cable = "rope"
     eprintln!("worst relative tension error {worst:e}");
 }
 
-const MACHINE: &str = r#"
-[scene]
-name = "machine"
-[[body]]
-name = "ground"
-kind = "static"
-[[body.shape]]
-type = "plane"
-[[body]]
-name = "chassis"
-mass = 2000.0
-position = [0, 0, 0.5]
-[[body.shape]]
-type = "box"
-size = [4.0, 2.0, 1.0]
-[[body]]
-name = "boom"
-mass = 500.0
-position = [1.0, 0, 1.5]
-[[body.shape]]
-type = "box"
-size = [2.0, 0.4, 0.4]
-[[joint]]
-name = "mount"
-type = "fixed"
-a = "boom"
-b = "chassis"
-anchor = [0, 0, 1.0]
-[[sensor]]
-name = "pads"
-type = "contact_sum"
-bodies = ["chassis", "boom"]
-[[sensor]]
-name = "lmi"
-type = "tipping"
-bodies = ["chassis", "boom"]
-[[sensor]]
-name = "mount"
-type = "joint"
-joint = "mount"
-"#;
+const MACHINE: &str = include_str!("support/scenes/machine.toml");
 
 /// A 2,500 kg machine (chassis and boom on a fixed joint) at rest on the ground: the contact
 /// reactions sum to its weight, the boom's mount carries the boom's weight and moment, and the

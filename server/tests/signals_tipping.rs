@@ -8,64 +8,7 @@
 use pivotsim_server::scene;
 use pivotsim_server::signals::EventKind;
 
-const SCENE: &str = r#"
-[scene]
-name = "slewing-crane"
-[[body]]
-name = "ground"
-kind = "static"
-[[body.shape]]
-type = "plane"
-[[body]]
-name = "carrier"
-mass = 6000.0
-position = [0, 0, 0.25]
-[[body.shape]]
-type = "box"
-size = [4.0, 2.0, 0.5]
-[[body]]
-name = "boom"
-mass = 1000.0
-position = [1.9283628290596178, 2.2981333293569337, 0.75]
-rotation = [0, 0, 50]
-angular_velocity = [0, 0, 0.1]
-velocity = [-0.22981333293569337, 0.19283628290596178, 0]
-[[body.shape]]
-type = "box"
-size = [6.0, 0.2, 0.2]
-[[body]]
-name = "load"
-mass = 1000.0
-position = [3.8567256581192355, 4.596266658713867, 0.75]
-inertia = [40.0, 40.0, 40.0]
-velocity = [-0.4596266658713867, 0.38567256581192355, 0]
-angular_velocity = [0, 0, 0.1]
-[[body.shape]]
-type = "ball"
-radius = 0.25
-[[joint]]
-name = "slew"
-type = "hinge"
-a = "boom"
-b = "carrier"
-anchor = [0, 0, 0.75]
-axis = [0, 0, 1]
-motor = { speed = 0.1, max_force = 1e8 }
-[[joint]]
-name = "tip"
-type = "fixed"
-a = "load"
-b = "boom"
-anchor = [3.8567256581192355, 4.596266658713867, 0.75]
-[[sensor]]
-name = "lmi"
-type = "tipping"
-bodies = ["carrier", "boom", "load"]
-[[event]]
-name = "lmi-warning"
-channel = "lmi/percent"
-below = 10.0
-"#;
+const SCENE: &str = include_str!("support/scenes/slewing_crane.toml");
 
 #[test]
 fn tipping_margin_crosses_zero_at_the_static_boom_angle_and_the_machine_tips() {
