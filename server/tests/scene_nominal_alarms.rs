@@ -9,10 +9,10 @@
 //! The hook load must not jolt above its static value through the boom's lift: at most 10 % above
 //! the pipe's and hook's weight from t = 4.5 s (1.86 × with the linear ramp).
 //!
-//! Known failing case, not fixed: the forklift's crate creeps on its forks in the 360° turn at full
-//! steering lock and its `load-slipping` event is raised (at 7.97 s; with the linear ramps once
-//! near the end of the run, as the scene file says). It is a scene matter (the turn is at the
-//! crate's friction limit), not a jolt; the test lets exactly that event through on that scene.
+//! The forklift's `load-slipping` fires when its pallet slides over the tines faster than 2 cm/s
+//! (the contact's `slip_speed`); in the nominal run it creeps at most 1.3 cm/s (during the lift)
+//! and 2.7 mm/s in the turn. It used to fire on the `sliding` flag (every pressed point's friction
+//! row at its bound), which the turn sets while the pallet barely moves (docs/notes/dynamics.md).
 
 use pivotsim_server::scene::{self, BUILTIN};
 use pivotsim_server::signals::EventKind;
@@ -30,8 +30,6 @@ fn no_shipped_scene_raises_an_alarm_in_its_nominal_run() {
             }));
         }
         println!("{}: {} events raised {raised:?}", b.name, raised.len());
-        let known = |e: &String| b.name == "forklift" && e.starts_with("load-slipping ");
-        raised.retain(|e| !known(e));
         assert!(raised.is_empty(), "{}: {raised:?}", b.name);
     }
 }

@@ -1,6 +1,6 @@
-//! Threshold events with a hold (a debounce): the forklift's `load-slipping` event on the 0/1
-//! `forks_load/sliding` flag, which flickers while the crate creeps on the forks near the end of
-//! the run. Without a hold every flicker is a raise and a clear; with `hold = τ` an event fires only
+//! Threshold events with a hold (a debounce): the forklift's `load-slipping` event set here on the
+//! 0/1 `forks_load/sliding` flag (the scene raises it on the slip speed), which flickers while the
+//! crate creeps on the forks. Without a hold every flicker is a raise and a clear; with `hold = τ` an event fires only
 //! after its condition held at every step for `τ`, which this test checks against the channel's
 //! own history, step by step.
 
@@ -16,7 +16,13 @@ type Fired = Vec<(EventKind, f64)>;
 /// event's hold set to `hold`.
 fn run(hold: f64) -> (Flag, Fired) {
     let set = [format!("event.load-slipping.hold={hold}").parse().expect("override")];
-    let mut s = scene::load_with("forklift", &set).expect("forklift");
+    let shipped = scene::builtin("forklift").expect("forklift").text;
+    let (speed, flag) = (
+        "channel = \"forks_load/slip_speed\"\nabove = 0.02",
+        "channel = \"forks_load/sliding\"\nabove = 0.5",
+    );
+    assert!(shipped.contains(speed), "the forklift's event changed");
+    let mut s = scene::load_str_with("forklift.toml", &shipped.replace(speed, flag), &set).expect("forklift");
     let steps = (s.duration / s.world.settings().timestep).round() as usize;
     let (mut flag, mut events) = (Vec::new(), Vec::new());
     for _ in 0..steps {

@@ -150,6 +150,21 @@ fn box_on_incline_sticks_below_tan_theta_mu_and_slips_above() {
             } else {
                 assert!(slipping == 4 && sliding == 1.0, "ratio {ratio}: {pressed:?}");
             }
+            // The slip speed against Coulomb's law: at rest below tan θ = μ; above, the box slides
+            // down the static slope at a = g (sin θ − μ cos θ), so its points slip at a t.
+            let slip = s.signals.value("grip/slip_speed").unwrap();
+            let t = s.world.time();
+            if ratio < 1.0 {
+                assert!(slip < 1e-4, "ratio {ratio}: a sticking box slips at {slip} m/s");
+            } else if t > 0.1 {
+                let th = (ratio * 0.5f64).atan();
+                let a = G * (th.sin() - 0.5 * th.cos());
+                assert!(
+                    (slip - a * t).abs() < 0.05 * a * t,
+                    "ratio {ratio}, t = {t}: {slip} m/s vs a t = {}",
+                    a * t
+                );
+            }
             let f = s.signals.sensor_values("grip").unwrap();
             // The directions (the wire's contact record): a unit normal across the slope, the
             // friction vector in the slope's plane with the reported magnitude; on the box, the

@@ -256,7 +256,7 @@ impl Signals {
                 continue;
             }
             self.valid[first..first + n].fill(true);
-            let mut out = [0.0; 9];
+            let mut out = [0.0; OUT];
             match &self.sensors[s].kind {
                 SensorKind::Joint { joint } => {
                     let (f, t) = self.joint_frame_wrench(world, *joint);
@@ -349,9 +349,24 @@ fn friction_norm(c: &ContactReport) -> f64 {
     c.friction_impulse[0].hypot(c.friction_impulse[1])
 }
 
+/// Channels of the widest sensor kind (`contact_sum`).
+const OUT: usize = 10;
+
+/// The relative tangential speed of a contact's two bodies at its points (m/s): how fast B's point
+/// slides over A's, from the bodies' velocities after the step.
+fn slip_speed(world: &World, c: &ContactReport) -> f64 {
+    let at = |k: usize, p: &Vector3<f64>| {
+        world
+            .body(c.bodies[k])
+            .map_or(Vector3::zeros(), |b| b.linvel() + b.angvel().cross(&(p - b.position())))
+    };
+    let v = at(1, &c.point_b) - at(0, &c.point_a);
+    (v - c.normal * c.normal.dot(&v)).norm()
+}
+
 /// The force on `bodies` from `with` (or from everything else) and its magnitudes and states:
-/// `fx fy fz normal friction points stick slip`.
-fn contact_sum(world: &World, bodies: &BodySet, with: Option<&BodySet>, h: f64, out: &mut [f64; 9]) {
+/// `fx fy fz normal friction points stick slip sliding slip_speed`.
+fn contact_sum(world: &World, bodies: &BodySet, with: Option<&BodySet>, h: f64, out: &mut [f64; OUT]) {
     let other = |b| with.map_or(!bodies.contains(b), |w| w.contains(b));
     let mut f = Vector3::zeros();
     for c in world.contacts() {
@@ -380,13 +395,16 @@ fn contact_sum(world: &World, bodies: &BodySet, with: Option<&BodySet>, h: f64, 
                 out[7] += 1.0;
             }
         }
+        if ContactStateKind::of(&c) != ContactStateKind::Open {
+            out[9] = out[9].max(slip_speed(world, &c));
+        }
     }
     out[..3].copy_from_slice(f.as_slice());
     out[8] = if out[5] > 0.0 && out[7] == out[5] { 1.0 } else { 0.0 };
 }
 
 /// The tipping margin of the machine `bodies`: `distance percent supports stabilizing overturning`.
-fn tipping(world: &World, bodies: &BodySet, touch: f64, poly: &mut SupportPolygon, out: &mut [f64; 9]) {
+fn tipping(world: &World, bodies: &BodySet, touch: f64, poly: &mut SupportPolygon, out: &mut [f64; OUT]) {
     poly.clear();
     for c in world.contacts() {
         let [a, b] = c.bodies;
@@ -412,5 +430,6 @@ fn tipping(world: &World, bodies: &BodySet, touch: f64, poly: &mut SupportPolygo
         .members()
         .filter_map(|id| world.body(id).filter(|b| b.is_dynamic()).map(|b| (b.mass(), b.position())));
     let t = poly.margin(&com, g, members);
-    *out = [t.distance, t.percent, t.supports as f64, t.stabilizing, t.overturning, 0.0, 0.0, 0.0, 0.0];
+    out[..5].copy_from_slice(&[t.distance, t.percent, t.supports as f64, t.stabilizing, t.overturning]);
+    out[5..].fill(0.0);
 }

@@ -65,7 +65,9 @@ pub enum SensorKind {
     /// `friction`, `points` (pressed points), `stick`, `slip` (points in each state), `sliding`
     /// (1 when every pressed point slips: the contact as a whole slides; a rigid body on
     /// redundant contacts cannot slide while one of them sticks, whichever points the solver put
-    /// at their bound).
+    /// at their bound), `slip_speed` (m/s: the largest relative tangential speed of the two
+    /// bodies at a pressed point after the step — what an operator sees of a load moving on its
+    /// support, where the index states only say which friction rows reached their bound).
     ContactSum {
         /// The bodies measured.
         bodies: BodySet,
@@ -92,7 +94,8 @@ const JOINT: &[&str] = &["fx", "fy", "fz", "tx", "ty", "tz"];
 const CYLINDER: &[&str] = &["force"];
 const DRUM: &[&str] = &["torque"];
 const TENSION: &[&str] = &["tension"];
-const CONTACT_SUM: &[&str] = &["fx", "fy", "fz", "normal", "friction", "points", "stick", "slip", "sliding"];
+const CONTACT_SUM: &[&str] =
+    &["fx", "fy", "fz", "normal", "friction", "points", "stick", "slip", "sliding", "slip_speed"];
 const TIPPING: &[&str] = &["distance", "percent", "supports", "stabilizing", "overturning"];
 
 impl SensorKind {
