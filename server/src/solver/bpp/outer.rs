@@ -54,8 +54,9 @@ impl Solver {
 
     /// After the friction bounds followed the new normal impulses (outer iteration): a stalled
     /// outer iteration (cycling between index sets) hands over to the semismooth Newton method on
-    /// the whole natural map, from the best iterate; with [`SolverOptions::safeguard_after_update`]
-    /// the active-set safeguard continues from the last index set, its tight rows at the new bounds.
+    /// the whole natural map, from the best iterate; with
+    /// [`SolverOptions::safeguard_after_update`](super::SolverOptions::safeguard_after_update) the
+    /// active-set safeguard continues from the last index set, its tight rows at the new bounds.
     pub(super) fn outer_update(&mut self, variant: Variant, progress: &mut Progress) -> Next {
         self.stats.friction_updates += 1;
         progress.best_ninf = usize::MAX;
