@@ -28,7 +28,7 @@
 use nalgebra::Vector3;
 use serde::Serialize;
 
-use crate::dynamics::{FreeAxis, Joint, JointRow, Watchdog, World, WorldSettings};
+use crate::dynamics::{Watchdog, World, WorldSettings};
 use crate::scene::{self, ActuatorKind, FaultRequest, Scene};
 
 /// Fault moments (s).
@@ -141,31 +141,10 @@ fn energy(w: &World) -> f64 {
     w.kinetic_energy() + w.potential_energy()
 }
 
-/// The elastic deflection of joint `j` in the last step (m): `|c_k λ_k / h|` over its locked
-/// linear rows (slots 0..3, 0..2 for a joint that slides: the module table of `joint.rs`).
-pub fn elastic_deflection(w: &World, j: &Joint) -> f64 {
-    let h = w.settings().timestep;
-    let linear = if j.kind().has_axis(FreeAxis::Linear) { 2 } else { 3 };
-    (0..linear)
-        .map(|k| {
-            let row = JointRow::Locked(k);
-            let d = j.compliance(row) * w.joint_impulse(j.id(), row) / h;
-            d * d
-        })
-        .sum::<f64>()
-        .sqrt()
-}
-
-/// The worst drift over the enabled joints: error less elastic deflection (m; NaN counts as ∞).
-pub fn worst_drift(w: &World) -> f64 {
-    w.joints()
-        .iter()
-        .filter(|j| j.is_enabled())
-        .map(|j| {
-            let e = w.joint_error(j.id()).unwrap_or(f64::NAN);
-            if e.is_nan() { f64::INFINITY } else { (e - elastic_deflection(w, j)).max(0.0) }
-        })
-        .fold(0.0, f64::max)
+/// The worst drift over the enabled joints whose error exceeds `above`: error less elastic
+/// deflection (m; NaN counts as ∞; 0 when none exceeds it).
+pub fn worst_drift(w: &World, above: f64) -> f64 {
+    w.worst_joint_drift(above).map_or(0.0, |(_, d)| if d.is_nan() { f64::INFINITY } else { d })
 }
 
 /// The faults of scene `s`: (kind, target).
@@ -245,7 +224,8 @@ pub fn run_cell(
         cell.substepped += (w.last_substeps() > 1) as u64;
         let error = w.max_joint_error();
         cell.joint_error = cell.joint_error.max(error);
-        cell.joint_drift = cell.joint_drift.max(if error > JOINT_BOUND { worst_drift(w) } else { error });
+        cell.joint_drift =
+            cell.joint_drift.max(if error > JOINT_BOUND { worst_drift(w, 0.0) } else { error });
         cell.top_speed = w.bodies().iter().map(|b| b.linvel().norm()).fold(cell.top_speed, f64::max);
         cell.energy_excess = cell.energy_excess.max(energy(w) - e0 - (w.input_work() - w0));
         if let Some(i) = dog.check(w)

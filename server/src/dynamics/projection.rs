@@ -49,8 +49,9 @@ use super::assemble::BodyMotion;
 use super::body::RigidBody;
 use super::error::StepError;
 use super::ids::BodyId;
-use super::joint::Joint;
+use super::joint::{Joint, JointRow};
 use super::joint_rows::{JointGeometry, push_joint_rows};
+use super::motor::FreeAxis;
 use super::rows::{RowKey, RowKind, Side};
 use super::settings::WorldSettings;
 use super::step::StepWorkspace;
@@ -61,7 +62,8 @@ pub const GUARD_ITERATIONS: usize = 4;
 
 /// Runs `settings.projection_iterations` projections on `ws.x_new`, `ws.q_new` (step `step`), then
 /// the joint-error guard: while the worst joint error at the new poses exceeds
-/// `settings.joint_error_tolerance` and the last projection at least halved it, one more (at most
+/// `settings.joint_error_tolerance` beyond its elastic deflection and the last projection cut it by
+/// a quarter, one more (at most
 /// [`GUARD_ITERATIONS`]). The guard's count is left in `ws.guard_iterations`.
 pub(crate) fn project(
     settings: &WorldSettings,
@@ -76,11 +78,12 @@ pub(crate) fn project(
     ws.guard_iterations = 0;
     let tol = settings.joint_error_tolerance;
     if tol > 0.0 {
-        let mut error = worst_new_joint_error(joints, ws);
+        let h = settings.timestep;
+        let mut error = worst_new_joint_drift(joints, ws, step, h, tol);
         while error > tol && ws.guard_iterations < GUARD_ITERATIONS {
             project_once(settings, bodies, joints, ws, step)?;
             ws.guard_iterations += 1;
-            let after = worst_new_joint_error(joints, ws);
+            let after = worst_new_joint_drift(joints, ws, step, h, tol);
             // A projection that does not halve the error meets what it cannot remove (a compliant
             // joint's deflection, a limit against a contact): stop rather than spend the budget.
             let progress = after < 0.75 * error;
@@ -93,17 +96,47 @@ pub(crate) fn project(
     Ok(())
 }
 
-/// The worst locked-anchor error of the enabled joints at the new poses `ws.x_new`, `ws.q_new`
-/// (m; as [`World::max_joint_error`](super::World::max_joint_error) reads it after the step). NaN
-/// counts as infinitely large.
-pub(crate) fn worst_new_joint_error(joints: &[Joint], ws: &StepWorkspace) -> f64 {
+/// The worst drift of the enabled joints at the new poses `ws.x_new`, `ws.q_new` (m): the
+/// locked-anchor error (as [`World::max_joint_error`](super::World::max_joint_error) reads it after
+/// the step) less the joint's elastic deflection `|c λ / h|` over its locked linear rows, `λ` this
+/// step's impulses (stamped `step + 1`) — what a projection can remove; a soft joint's give under
+/// its load is its target. The deflection is read only for joints whose error exceeds `above`
+/// (the others count with their error). NaN counts as infinitely large.
+pub(crate) fn worst_new_joint_drift(
+    joints: &[Joint],
+    ws: &StepWorkspace,
+    step: u64,
+    h: f64,
+    above: f64,
+) -> f64 {
     let mut worst = 0.0f64;
     for j in joints.iter().filter(|j| j.enabled) {
         let (a, b) = (new_side(Some(j.body_a), ws), new_side(j.body_b, ws));
         let e = JointGeometry::new(j, &a, &b).locked_anchor_error(j.kind);
-        worst = if e.is_nan() { f64::INFINITY } else { worst.max(e) };
+        if e.is_nan() {
+            return f64::INFINITY;
+        }
+        let drift = if e > above { (e - elastic_deflection(j, ws, step, h)).max(0.0) } else { e };
+        worst = worst.max(drift);
     }
     worst
+}
+
+/// `|c λ / h|` over joint `j`'s locked linear rows, `λ` its impulses of this step (stamped
+/// `step + 1`; 0 for a row not solved in it).
+fn elastic_deflection(j: &Joint, ws: &StepWorkspace, step: u64, h: f64) -> f64 {
+    let linear = if j.kind.has_axis(FreeAxis::Linear) { 2 } else { 3 };
+    let mut sum = 0.0;
+    for k in 0..linear {
+        let row = JointRow::Locked(k);
+        let lambda = match ws.warm_row(RowKey::Joint { joint: j.id, row }) {
+            Some(w) if w.stamp == step + 1 => w.lambda,
+            _ => 0.0,
+        };
+        let d = j.compliance[row.slot()] * lambda / h;
+        sum += d * d;
+    }
+    sum.sqrt()
 }
 
 /// A joint's side at the new poses, at rest (the projection moves positions only).

@@ -246,6 +246,51 @@ impl World {
         worst
     }
 
+    /// A joint's elastic deflection in the last step (m): `|c_k λ_k / h|` over its locked linear
+    /// rows (slots 0..3, or 0..2 for a joint that slides; `joint.rs`'s table) — the give a row of
+    /// compliance `c` has by design under its load (paper eq. 1). `None` for an unknown joint.
+    pub fn joint_elastic_deflection(&self, id: JointId) -> Option<f64> {
+        let j = self.joints.get(id.index())?;
+        let h = self.settings.timestep;
+        let linear = if j.kind.has_axis(FreeAxis::Linear) { 2 } else { 3 };
+        let sum: f64 = (0..linear)
+            .map(|k| {
+                let row = JointRow::Locked(k);
+                let d = j.compliance(row) * self.joint_impulse(id, row) / h;
+                d * d
+            })
+            .sum();
+        Some(sum.sqrt())
+    }
+
+    /// A joint's drift (m): its error ([`World::joint_error`]) beyond its elastic deflection
+    /// ([`World::joint_elastic_deflection`]), never negative; NaN stays NaN. `None` for an unknown
+    /// joint.
+    pub fn joint_drift(&self, id: JointId) -> Option<f64> {
+        let e = self.joint_error(id)?;
+        let d = self.joint_elastic_deflection(id)?;
+        Some(if e.is_nan() { e } else { (e - d).max(0.0) })
+    }
+
+    /// The enabled joint with the largest drift ([`World::joint_drift`]) among those whose error
+    /// exceeds `above` (m), and that drift; `None` if no joint's error exceeds it. NaN wins.
+    /// Allocation-free; it reads impulses only of the joints past `above`.
+    pub fn worst_joint_drift(&self, above: f64) -> Option<(JointId, f64)> {
+        let mut worst: Option<(JointId, f64)> = None;
+        for j in self.joints.iter().filter(|j| j.enabled) {
+            let e = self.joint_geometry(j).locked_anchor_error(j.kind);
+            if !(e.is_nan() || e > above) {
+                continue;
+            }
+            let d = self.joint_drift(j.id).unwrap_or(f64::NAN);
+            match worst {
+                Some((_, w)) if w.is_nan() || !(d.is_nan() || d > w) => {}
+                _ => worst = Some((j.id, d)),
+            }
+        }
+        worst
+    }
+
     /// Position error of one joint at the current poses (m; as [`World::max_joint_error`], also for
     /// a disabled joint); `None` for an unknown joint.
     pub fn joint_error(&self, id: JointId) -> Option<f64> {
