@@ -370,6 +370,22 @@ pub struct Joint {
 }
 
 impl Joint {
+    /// The joint's elastic deflection (m) under the impulses `impulse(row)` of a step of length
+    /// `h`: `|c_k λ_k / h|` over its locked linear rows (slots 0..3, or 0..2 for a joint that
+    /// slides: the module table) — the give a row of compliance `c` has by design under its load
+    /// (paper eq. 1). Shared by the world's drift queries and the joint-error guard.
+    pub(crate) fn elastic_deflection(&self, h: f64, impulse: impl Fn(JointRow) -> f64) -> f64 {
+        let linear = if self.kind.has_axis(FreeAxis::Linear) { 2 } else { 3 };
+        let sum: f64 = (0..linear)
+            .map(|k| {
+                let row = JointRow::Locked(k);
+                let d = self.compliance[row.slot()] * impulse(row) / h;
+                d * d
+            })
+            .sum();
+        sum.sqrt()
+    }
+
     /// Whether the joint currently contributes rows.
     pub fn is_enabled(&self) -> bool {
         self.enabled

@@ -49,9 +49,8 @@ use super::assemble::BodyMotion;
 use super::body::RigidBody;
 use super::error::StepError;
 use super::ids::BodyId;
-use super::joint::{Joint, JointRow};
+use super::joint::Joint;
 use super::joint_rows::{JointGeometry, push_joint_rows};
-use super::motor::FreeAxis;
 use super::rows::{RowKey, RowKind, Side};
 use super::settings::WorldSettings;
 use super::step::StepWorkspace;
@@ -122,21 +121,13 @@ pub(crate) fn worst_new_joint_drift(
     worst
 }
 
-/// `|c λ / h|` over joint `j`'s locked linear rows, `λ` its impulses of this step (stamped
-/// `step + 1`; 0 for a row not solved in it).
+/// Joint `j`'s elastic deflection under its impulses of this step (stamped `step + 1`; 0 for a
+/// row not solved in it).
 fn elastic_deflection(j: &Joint, ws: &StepWorkspace, step: u64, h: f64) -> f64 {
-    let linear = if j.kind.has_axis(FreeAxis::Linear) { 2 } else { 3 };
-    let mut sum = 0.0;
-    for k in 0..linear {
-        let row = JointRow::Locked(k);
-        let lambda = match ws.warm_row(RowKey::Joint { joint: j.id, row }) {
-            Some(w) if w.stamp == step + 1 => w.lambda,
-            _ => 0.0,
-        };
-        let d = j.compliance[row.slot()] * lambda / h;
-        sum += d * d;
-    }
-    sum.sqrt()
+    j.elastic_deflection(h, |row| match ws.warm_row(RowKey::Joint { joint: j.id, row }) {
+        Some(w) if w.stamp == step + 1 => w.lambda,
+        _ => 0.0,
+    })
 }
 
 /// A joint's side at the new poses, at rest (the projection moves positions only).

@@ -251,16 +251,7 @@ impl World {
     /// compliance `c` has by design under its load (paper eq. 1). `None` for an unknown joint.
     pub fn joint_elastic_deflection(&self, id: JointId) -> Option<f64> {
         let j = self.joints.get(id.index())?;
-        let h = self.settings.timestep;
-        let linear = if j.kind.has_axis(FreeAxis::Linear) { 2 } else { 3 };
-        let sum: f64 = (0..linear)
-            .map(|k| {
-                let row = JointRow::Locked(k);
-                let d = j.compliance(row) * self.joint_impulse(id, row) / h;
-                d * d
-            })
-            .sum();
-        Some(sum.sqrt())
+        Some(j.elastic_deflection(self.settings.timestep, |row| self.joint_impulse(id, row)))
     }
 
     /// A joint's drift (m): its error ([`World::joint_error`]) beyond its elastic deflection
