@@ -63,7 +63,8 @@ pub const GUARD_ITERATIONS: usize = 4;
 /// the joint-error guard: while the worst joint error at the new poses exceeds
 /// `settings.joint_error_tolerance` beyond its elastic deflection and the last projection cut it by
 /// a quarter, one more (at most
-/// [`GUARD_ITERATIONS`]). The guard's count is left in `ws.guard_iterations`.
+/// [`GUARD_ITERATIONS`]). The guard's count is left in `ws.guard_iterations`, the drift it ended
+/// with (0 with the guard off) in `ws.guard_drift`.
 pub(crate) fn project(
     settings: &WorldSettings,
     bodies: &[RigidBody],
@@ -75,6 +76,7 @@ pub(crate) fn project(
         project_once(settings, bodies, joints, ws, step)?;
     }
     ws.guard_iterations = 0;
+    ws.guard_drift = 0.0;
     let tol = settings.joint_error_tolerance;
     if tol > 0.0 {
         let h = settings.timestep;
@@ -83,14 +85,16 @@ pub(crate) fn project(
             project_once(settings, bodies, joints, ws, step)?;
             ws.guard_iterations += 1;
             let after = worst_new_joint_drift(joints, ws, step, h, tol);
-            // A projection that does not halve the error meets what it cannot remove (a compliant
-            // joint's deflection, a limit against a contact): stop rather than spend the budget.
+            // A projection that does not cut the drift by a quarter meets what it cannot remove (a
+            // limit against a contact, a drift too large to linearize): stop rather than spend the
+            // budget.
             let progress = after < 0.75 * error;
             error = after;
             if !progress {
                 break;
             }
         }
+        ws.guard_drift = error;
     }
     Ok(())
 }
@@ -101,13 +105,7 @@ pub(crate) fn project(
 /// step's impulses (stamped `step + 1`) — what a projection can remove; a soft joint's give under
 /// its load is its target. The deflection is read only for joints whose error exceeds `above`
 /// (the others count with their error). NaN counts as infinitely large.
-pub(crate) fn worst_new_joint_drift(
-    joints: &[Joint],
-    ws: &StepWorkspace,
-    step: u64,
-    h: f64,
-    above: f64,
-) -> f64 {
+fn worst_new_joint_drift(joints: &[Joint], ws: &StepWorkspace, step: u64, h: f64, above: f64) -> f64 {
     let mut worst = 0.0f64;
     for j in joints.iter().filter(|j| j.enabled) {
         let (a, b) = (new_side(Some(j.body_a), ws), new_side(j.body_b, ws));

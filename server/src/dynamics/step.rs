@@ -139,6 +139,8 @@ pub(crate) struct StepWorkspace {
     pub proj_motion: Vec<BodyMotion>,
     /// Projections the joint-error guard ran in the last step (`projection.rs`).
     pub guard_iterations: usize,
+    /// The worst joint drift the guard left at the new poses (m; 0 with the guard off).
+    pub guard_drift: f64,
     /// Substeps of the last step (1: none).
     pub substeps: usize,
     /// The bodies' state before a step re-run as substeps: position, orientation, velocities.

@@ -27,7 +27,7 @@ use super::force::ForceElement;
 use super::ids::{BodyId, CouplingId, ForceId, JointId};
 use super::joint::{Joint, JointBuilder, JointFrames, JointKind};
 use super::motor::{FreeAxis, JointMotor};
-use super::projection::{project, worst_new_joint_drift};
+use super::projection::project;
 use super::settings::{GeometricStiffness, WorldSettings};
 use super::step::StepWorkspace;
 
@@ -184,7 +184,7 @@ impl World {
             .map(|i| h * self.ws.w_new[i].norm())
             .fold(0.0, f64::max);
         // `turn` is a max over finite or infinite values (f64::max drops NaN).
-        if turn <= SUBSTEP_TURN || worst_new_joint_drift(&self.joints, &self.ws, self.solves, h, tol) <= tol {
+        if turn <= SUBSTEP_TURN || self.ws.guard_drift <= tol {
             return None;
         }
         Some(((turn / SUBSTEP_TURN).ceil() as usize).clamp(2, settings.max_substeps))
