@@ -22,9 +22,10 @@ use crossterm::event::{Event, KeyCode, KeyEventKind, KeyModifiers};
 use pivotsim_msgs as msgs;
 use pivotsim_msgs::Topic;
 
+use crate::common::Common;
 use crate::keymap::{KeyAction, KeyState, Layout, key_name};
 use crate::net::{InputSink, Stream, TransportKind, now_ns};
-use crate::{Common, interrupt, interrupted, secs};
+use crate::stop::{interrupt, interrupted, secs};
 
 /// `drive` options.
 #[derive(Debug, clap::Args)]
@@ -401,8 +402,10 @@ pub fn run(common: &Common, args: &Args) -> Result<ExitCode> {
     }
     let sink = InputSink::open(args.transport, &world, timeout)?;
     // Stats for the status line (best effort).
-    let stats =
-        Stream::open(common, args.transport, &[Topic::Stats], 64, Duration::from_millis(2), None).ok();
+    let stats = common
+        .server()
+        .and_then(|s| Stream::open(&s, args.transport, &[Topic::Stats], 64, Duration::from_millis(2), None))
+        .ok();
     let use_keys = !scripted && tty;
     let mut keys = KeyState::new(&layout, false);
     let raw = if use_keys {

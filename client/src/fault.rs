@@ -9,7 +9,7 @@ use std::process::ExitCode;
 use anyhow::{Result, anyhow};
 use pivotsim_msgs as msgs;
 
-use crate::Common;
+use crate::common::Common;
 
 /// `fault` options.
 #[derive(Debug, clap::Args)]

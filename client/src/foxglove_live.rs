@@ -33,12 +33,13 @@ use foxglove::{ChannelBuilder, Context, PartialMetadata, RawChannel};
 use pivotsim_msgs as msgs;
 use pivotsim_msgs::Topic;
 
+use crate::common::Common;
 use crate::fox::topics::{self, ChannelSpec};
 use crate::fox::{self, frames, scene};
 use crate::net::{Received, Stream, TransportKind};
+use crate::stop::{interrupted, secs};
 use crate::tojson;
 use crate::util::scene_best_effort;
-use crate::{Common, interrupted, secs};
 
 /// `foxglove` options.
 #[derive(Debug, clap::Args)]
@@ -272,7 +273,7 @@ impl View<'_> {
 pub fn run(common: &Common, args: &Args) -> Result<ExitCode> {
     let world = common.world()?;
     let stream = Stream::open(
-        common,
+        &common.server()?,
         args.transport,
         &[Topic::Poses, Topic::Stats, Topic::Signals, Topic::Events],
         1024,

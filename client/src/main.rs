@@ -17,6 +17,7 @@
 //! Every loop is bounded by a count and/or a time, and Ctrl-C stops every command cleanly.
 //! Malformed frames are counted and skipped.
 
+mod common;
 mod control;
 mod drive;
 mod fault;
@@ -29,28 +30,14 @@ mod record;
 mod scene;
 mod send;
 mod signals;
+mod stop;
 mod tojson;
 mod util;
 mod watch;
 
-use std::sync::atomic::{AtomicBool, Ordering};
-use std::time::Duration;
-
-use anyhow::{Context, Result};
 use clap::{Parser, Subcommand};
-use pivotsim_msgs::WorldName;
 
-static INTERRUPTED: AtomicBool = AtomicBool::new(false);
-
-/// Whether Ctrl-C (SIGINT/SIGTERM) was received.
-pub fn interrupted() -> bool {
-    INTERRUPTED.load(Ordering::Relaxed)
-}
-
-/// Marks the run as interrupted (Ctrl-C read as a key in raw mode).
-pub fn interrupt() {
-    INTERRUPTED.store(true, Ordering::Relaxed);
-}
+use common::Common;
 
 /// Operator console and probes for the pivotsim server.
 #[derive(Debug, Parser)]
@@ -60,60 +47,6 @@ struct Cli {
     common: Common,
     #[command(subcommand)]
     command: Command,
-}
-
-/// Options every command takes.
-#[derive(Debug, Clone, clap::Args)]
-pub struct Common {
-    /// World name: the `<world>` of every key and service.
-    #[arg(long, global = true, default_value = "default", value_name = "NAME")]
-    pub world: String,
-    /// Zenoh endpoint of the server (repeatable).
-    #[arg(long, global = true, default_value = "tcp/127.0.0.1:7447", value_name = "ENDPOINT")]
-    pub connect: Vec<String>,
-    /// Zenoh endpoint to listen on (repeatable; none by default: the client only connects).
-    #[arg(long, global = true, value_name = "ENDPOINT")]
-    pub listen: Vec<String>,
-    /// A Zenoh configuration file (JSON5): credentials for a server with access control
-    /// (`deploy/zenoh/`), routers; `--connect`/`--listen` are added to it.
-    #[arg(long, global = true, value_name = "FILE")]
-    pub zenoh_config: Option<std::path::PathBuf>,
-    /// Seconds to wait for the server: connecting, replies, and (for watch, ping, record, send)
-    /// the longest silence before giving up. Default 5 s for one-shot commands and ping; watch and
-    /// record wait for frames indefinitely unless given.
-    #[arg(long, global = true, value_name = "SECONDS")]
-    pub timeout: Option<f64>,
-}
-
-impl Common {
-    /// The world name, checked.
-    pub fn world(&self) -> Result<WorldName> {
-        WorldName::new(self.world.clone()).with_context(|| format!("world name {:?}", self.world))
-    }
-
-    /// Zenoh endpoints.
-    pub fn zenoh(&self) -> net::ZenohOptions {
-        net::ZenohOptions {
-            connect: self.connect.clone(),
-            listen: self.listen.clone(),
-            config_file: self.zenoh_config.clone(),
-        }
-    }
-
-    /// The `--timeout`, or `default`.
-    pub fn timeout_or(&self, default: f64) -> Duration {
-        secs(self.timeout.unwrap_or(default))
-    }
-
-    /// Opens a Zenoh session to the server.
-    pub fn open_zenoh(&self) -> Result<net::ZenohLink> {
-        net::ZenohLink::open(&self.zenoh(), &self.world()?, self.timeout_or(5.0))
-    }
-}
-
-/// A duration from seconds (negative or non-finite: zero; huge: about a century).
-pub fn secs(s: f64) -> Duration {
-    if s.is_finite() && s > 0.0 { Duration::from_secs_f64(s.min(3.0e9)) } else { Duration::ZERO }
 }
 
 #[derive(Debug, Subcommand)]
@@ -142,12 +75,7 @@ fn main() -> std::process::ExitCode {
     let cli = Cli::parse();
     // iceoryx2 logs warnings such as "no config file" on stderr: errors only (IOX2_LOG_LEVEL overrides).
     iceoryx2::prelude::set_log_level_from_env_or(iceoryx2::prelude::LogLevel::Error);
-    // A second Ctrl-C while a command is winding down exits at once.
-    let _ = ctrlc::set_handler(|| {
-        if INTERRUPTED.swap(true, Ordering::Relaxed) {
-            std::process::exit(130);
-        }
-    });
+    stop::install_handler();
     let r = match &cli.command {
         Command::Watch(a) => watch::run(&cli.common, a),
         Command::Drive(a) => drive::run(&cli.common, a),

@@ -20,6 +20,8 @@ use pivotsim_msgs as msgs;
 use pivotsim_msgs::{Topic, WorldName};
 use zenoh::Wait;
 
+use crate::stop::interrupted;
+
 pub use pivotsim_link::wall_ns as now_ns;
 
 /// Which transport carries frames.
@@ -40,6 +42,25 @@ pub struct ZenohOptions {
     pub listen: Vec<String>,
     /// A Zenoh configuration file (credentials, routers); the endpoints are added to it.
     pub config_file: Option<std::path::PathBuf>,
+}
+
+/// What the transports need of the command line: where the server is, which world, and how long
+/// to wait for it.
+#[derive(Debug, Clone)]
+pub struct Server {
+    /// Zenoh endpoints and configuration.
+    pub zenoh: ZenohOptions,
+    /// The world.
+    pub world: WorldName,
+    /// How long to wait for a Zenoh peer.
+    pub timeout: Duration,
+}
+
+impl Server {
+    /// Opens a Zenoh session to the server ([`ZenohLink::open`]).
+    pub fn open_zenoh(&self) -> Result<ZenohLink> {
+        ZenohLink::open(&self.zenoh, &self.world, self.timeout)
+    }
 }
 
 /// A frame as received.
@@ -103,7 +124,7 @@ impl ZenohLink {
             if peers > 0 {
                 break;
             }
-            if Instant::now() >= deadline || crate::interrupted() {
+            if Instant::now() >= deadline || interrupted() {
                 bail!(
                     "zenoh: no peer reachable at {} within {:.1} s (is `pivotsim-server serve` running?)",
                     opts.connect.join(", "),
@@ -113,11 +134,6 @@ impl ZenohLink {
             std::thread::sleep(Duration::from_millis(10));
         }
         Ok(ZenohLink { session, world: world.clone(), subscribers: Vec::new() })
-    }
-
-    /// The session.
-    pub fn session(&self) -> &zenoh::Session {
-        &self.session
     }
 
     /// Subscribes to `key`, handing frames to `tx` tagged with the key's topic.
@@ -170,7 +186,7 @@ impl ZenohLink {
             .map_err(|e| anyhow!("zenoh: cannot declare a publisher on {key}: {e}"))?;
         let deadline = Instant::now() + timeout;
         while !p.matching_status().wait().map(|m| m.matching()).unwrap_or(false) {
-            if Instant::now() >= deadline || crate::interrupted() {
+            if Instant::now() >= deadline || interrupted() {
                 bail!("zenoh: nobody subscribes to {key} (no server for world `{}`?)", self.world);
             }
             std::thread::sleep(Duration::from_millis(5));
@@ -214,7 +230,7 @@ impl ZenohLink {
             if let Some(r) = self.query(key, payload.clone(), left)? {
                 return Ok(r);
             }
-            if Instant::now() >= deadline || crate::interrupted() {
+            if Instant::now() >= deadline || interrupted() {
                 bail!("zenoh: nothing answers {key} (no server for world `{}`?)", self.world);
             }
             std::thread::sleep(Duration::from_millis(20));
@@ -260,7 +276,7 @@ impl ZenohLink {
             } else {
                 alive_since = None;
             }
-            if Instant::now() >= deadline || crate::interrupted() {
+            if Instant::now() >= deadline || interrupted() {
                 bail!("zenoh: nothing answers {key} (no server for world `{}`?)", self.world);
             }
             std::thread::sleep(Duration::from_millis(20));
@@ -551,7 +567,7 @@ impl InputSink {
 pub fn wait_iox_subscriber(p: &IoxInputs, timeout: Duration) -> Result<()> {
     let deadline = Instant::now() + timeout;
     while p.subscribers() == 0 {
-        if Instant::now() >= deadline || crate::interrupted() {
+        if Instant::now() >= deadline || interrupted() {
             bail!("iceoryx2: nobody subscribes to the cmd service (no server for this world on this host?)");
         }
         std::thread::sleep(Duration::from_millis(5));
@@ -569,11 +585,11 @@ pub struct Stream {
 }
 
 impl Stream {
-    /// Subscribes to `topics` over `transport`. Zenoh: `zenoh` is used if given, else a session
+    /// Subscribes to `topics` of `server` over `transport`. Zenoh: `zenoh` is used if given, else a session
     /// is opened. iceoryx2: services are polled every `poll` (zero: spin); `zenoh` is kept for
     /// queries.
     pub fn open(
-        common: &crate::Common,
+        server: &Server,
         transport: TransportKind,
         topics: &[Topic],
         capacity: usize,
@@ -585,13 +601,13 @@ impl Stream {
             TransportKind::Zenoh => {
                 let mut link = match zenoh {
                     Some(l) => l,
-                    None => common.open_zenoh()?,
+                    None => server.open_zenoh()?,
                 };
                 link.subscribe(topics, &tx)?;
                 Ok(Stream { inbox, zenoh: Some(link), _iox: None })
             }
             TransportKind::Iceoryx2 => {
-                let r = IoxReceiver::start(&common.world()?, topics, &tx, poll)?;
+                let r = IoxReceiver::start(&server.world, topics, &tx, poll)?;
                 Ok(Stream { inbox, zenoh, _iox: Some(r) })
             }
         }

@@ -16,9 +16,10 @@ use anyhow::{Result, bail};
 use pivotsim_msgs as msgs;
 use pivotsim_msgs::Topic;
 
+use crate::common::Common;
 use crate::net::{Stream, TransportKind};
+use crate::stop::interrupted;
 use crate::util::{histogram, percentile};
-use crate::{Common, interrupted};
 
 /// `ping` options.
 #[derive(Debug, clap::Args)]
@@ -79,7 +80,7 @@ impl Summary {
 /// Runs `ping`.
 pub fn run(common: &Common, args: &Args) -> Result<ExitCode> {
     let poll = Duration::from_micros(args.poll_us);
-    let stream = Stream::open(common, args.transport, &[Topic::Poses], 4096, poll, None)?;
+    let stream = Stream::open(&common.server()?, args.transport, &[Topic::Poses], 4096, poll, None)?;
     let start = Instant::now();
     eprintln!(
         "pivotsim-client: ping over {:?}, world `{}`: {} pose frames after {} warm-up",

@@ -42,11 +42,12 @@ use anyhow::{Context, Result, bail};
 use pivotsim_msgs as msgs;
 use pivotsim_msgs::Topic;
 
+use crate::common::Common;
 use crate::fox::topics::{self, ChannelSpec};
 use crate::fox::{self, frames, scene};
 use crate::net::{Received, Stream, TransportKind};
+use crate::stop::{interrupted, secs};
 use crate::tojson;
-use crate::{Common, interrupted, secs};
 
 /// `record` options.
 #[derive(Debug, clap::Args)]
@@ -266,7 +267,8 @@ pub fn run(common: &Common, args: &Args) -> Result<ExitCode> {
         Topic::Boom,
         Topic::Actuator,
     ];
-    let stream = Stream::open(common, args.transport, &topics, 8192, Duration::from_micros(500), None)?;
+    let stream =
+        Stream::open(&common.server()?, args.transport, &topics, 8192, Duration::from_micros(500), None)?;
     let scene = crate::util::scene_best_effort(common, stream.zenoh(), common.timeout_or(2.0));
     if scene.is_none() {
         eprintln!("pivotsim-client: no scene description: bodies named by id, no scene channel");

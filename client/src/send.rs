@@ -21,8 +21,9 @@ use anyhow::{Context, Result, anyhow, bail};
 use pivotsim_msgs as msgs;
 use pivotsim_msgs::Topic;
 
+use crate::common::Common;
 use crate::net::{InputSink, Stream, TransportKind, now_ns};
-use crate::{Common, interrupted, secs};
+use crate::stop::{interrupted, secs};
 
 /// `send` options.
 #[derive(Debug, clap::Args)]
@@ -224,7 +225,14 @@ pub fn run(common: &Common, args: &Args) -> Result<ExitCode> {
     let stats = if args.no_verify {
         None
     } else {
-        let s = Stream::open(common, args.transport, &[Topic::Stats], 256, Duration::from_micros(500), None)?;
+        let s = Stream::open(
+            &common.server()?,
+            args.transport,
+            &[Topic::Stats],
+            256,
+            Duration::from_micros(500),
+            None,
+        )?;
         Some(s)
     };
     let before = stats.as_ref().and_then(|s| latest_counters(s, Duration::from_millis(400)));

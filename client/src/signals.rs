@@ -11,8 +11,9 @@ use anyhow::{Result, bail};
 use pivotsim_msgs as msgs;
 use pivotsim_msgs::Topic;
 
+use crate::common::Common;
 use crate::net::{Stream, TransportKind};
-use crate::{Common, interrupted, secs};
+use crate::stop::{interrupted, secs};
 
 /// Events kept under the table.
 const EVENT_LINES: usize = 8;
@@ -96,7 +97,7 @@ pub struct View {
 pub fn run(common: &Common, args: &View) -> Result<ExitCode> {
     let tty = std::io::stdout().is_terminal() && !args.plain && !args.json;
     let stream = Stream::open(
-        common,
+        &common.server()?,
         args.transport,
         &[Topic::Signals, Topic::Events],
         1024,

@@ -7,7 +7,7 @@ use std::time::Duration;
 
 use pivotsim_msgs as msgs;
 
-use crate::Common;
+use crate::common::Common;
 use crate::net::ZenohLink;
 
 /// A random 32-bit number (the standard library's per-process random hasher keys, mixed with the

@@ -13,10 +13,11 @@ use anyhow::{Result, bail};
 use pivotsim_msgs as msgs;
 use pivotsim_msgs::Topic;
 
+use crate::common::Common;
 use crate::net::{Stream, TransportKind, now_ns};
+use crate::stop::{interrupted, secs};
 use crate::tojson::{pose_json, stats_json};
 use crate::util::{FrameCounts, body_name, euler_zyx};
-use crate::{Common, interrupted, secs};
 
 /// `watch` options.
 #[derive(Debug, clap::Args)]
@@ -416,7 +417,8 @@ pub fn run(common: &Common, args: &Args) -> Result<ExitCode> {
     }
     let mode = Mode::of(args);
     let poll = Duration::from_micros(500);
-    let stream = Stream::open(common, args.transport, &[Topic::Poses, Topic::Stats], 1024, poll, None)?;
+    let stream =
+        Stream::open(&common.server()?, args.transport, &[Topic::Poses, Topic::Stats], 1024, poll, None)?;
     let scene_timeout = common.timeout_or(2.0);
     let scene = crate::util::scene_best_effort(common, stream.zenoh(), scene_timeout);
     if scene.is_none() {
