@@ -23,6 +23,7 @@
 //! receive time for stats, signals, contacts and events.
 
 use std::collections::HashMap;
+use std::net::SocketAddr;
 use std::process::ExitCode;
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
@@ -34,12 +35,13 @@ use pivotsim_msgs as msgs;
 use pivotsim_msgs::Topic;
 
 use crate::common::Common;
+use crate::fox::front::Front;
 use crate::fox::topics::{self, ChannelSpec};
 use crate::fox::{self, frames, scene};
 use crate::net::{Received, Stream, TransportKind};
 use crate::stop::{interrupted, secs};
 use crate::tojson;
-use crate::util::scene_best_effort;
+use crate::util::{SequenceGaps, scene_best_effort};
 
 /// `foxglove` options.
 #[derive(Debug, clap::Args)]
@@ -59,6 +61,30 @@ pub struct Args {
     /// Stop after this many pose frames.
     #[arg(long, value_name = "N")]
     pub count: Option<u64>,
+    /// Message timestamps: the simulation time (as the ROS 2 bridge's `/clock` and `/tf`, so the
+    /// two paths' recordings overlay) or the wall clock (server wall time for poses, receive time
+    /// for the rest).
+    #[arg(long, value_enum, default_value = "sim")]
+    pub clock: Clock,
+}
+
+/// Which clock stamps the live view's messages.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum Clock {
+    /// Simulation time, ns from the scene's start (what `/clock` carries on the ROS 2 path).
+    Sim,
+    /// Wall time, ns since the UNIX epoch.
+    Wall,
+}
+
+impl Clock {
+    /// The stamp of a frame at simulation time `sim_time` taken at wall time `wall_ns`.
+    fn stamp(self, sim_time: f64, wall_ns: u64) -> u64 {
+        match self {
+            Clock::Sim => frames::sim_ns(sim_time),
+            Clock::Wall => wall_ns,
+        }
+    }
 }
 
 /// The latest scene, encoded, for late subscribers.
@@ -66,6 +92,8 @@ pub struct Args {
 struct Latched {
     scene: Option<Vec<u8>>,
     description: Option<Vec<u8>>,
+    /// Their log time (the view's clock when they were published).
+    stamp: u64,
 }
 
 /// Sends the latched scene to a client that subscribes to its channels after it was published.
@@ -86,7 +114,7 @@ impl ServerListener for LateJoiners {
             return;
         };
         if let Some(b) = bytes {
-            raw.log_to_sink(b, client.sink_id());
+            raw.log_with_meta_to_sink(b, PartialMetadata::with_log_time(latched.stamp), client.sink_id());
         }
     }
 }
@@ -102,6 +130,7 @@ struct Channels {
     contacts: Arc<RawChannel>,
     contact_forces: Arc<RawChannel>,
     events: Arc<RawChannel>,
+    health: Arc<RawChannel>,
 }
 
 fn channel(ctx: &Arc<Context>, spec: ChannelSpec) -> Result<Arc<RawChannel>> {
@@ -125,11 +154,13 @@ impl Channels {
             contacts: channel(ctx, topics::contacts())?,
             contact_forces: channel(ctx, topics::contact_forces())?,
             events: channel(ctx, topics::events())?,
+            health: channel(ctx, topics::view_health())?,
         })
     }
 }
 
-/// What was sent so far.
+/// What was sent so far, and what never arrived: per stream, the steps the server published that
+/// this view never received (sequence gaps: lost in the transport or its inbox).
 #[derive(Debug, Default)]
 struct Counts {
     poses: u64,
@@ -138,6 +169,9 @@ struct Counts {
     events: u64,
     scenes: u64,
     malformed: u64,
+    poses_gaps: SequenceGaps,
+    stats_gaps: SequenceGaps,
+    signals_gaps: SequenceGaps,
 }
 
 /// The live view: channels, latched scene, the scene as known, the counts.
@@ -154,6 +188,7 @@ struct View<'a> {
     /// up to a second when nobody answers, e.g. an iceoryx2-only server).
     scene_retry: Duration,
     common: &'a Common,
+    clock: Clock,
     n: Counts,
 }
 
@@ -161,7 +196,8 @@ impl View<'_> {
     /// Publishes `s` (shapes and description) to everyone and latches it for late joiners.
     fn set_scene(&mut self, s: msgs::SceneDescription) -> Result<()> {
         let now = crate::net::now_ns();
-        let shapes = scene::scene_update(&s, frames::timestamp(now));
+        let stamp = self.clock.stamp(self.last_sim_time, now);
+        let shapes = scene::scene_update(&s, frames::timestamp(stamp));
         if shapes.skipped > 0 {
             eprintln!("pivotsim-client: {} colliders not drawn (heightfields by reference)", shapes.skipped);
         }
@@ -169,11 +205,11 @@ impl View<'_> {
         let description = serde_json::to_vec(&s)?;
         // Broadcast and latch under the lock that `on_subscribe` takes: a client that subscribes
         // meanwhile gets the old scene before the new one or the new one only, never new then old.
-        let meta = PartialMetadata::with_log_time(now);
+        let meta = PartialMetadata::with_log_time(stamp);
         let mut latched = self.latched.lock().unwrap_or_else(|e| e.into_inner());
         self.ch.scene.log_with_meta(&scene, meta);
         self.ch.description.log_with_meta(&description, meta);
-        *latched = Latched { scene: Some(scene), description: Some(description) };
+        *latched = Latched { scene: Some(scene), description: Some(description), stamp };
         drop(latched);
         eprintln!("pivotsim-client: scene `{}`: {} bodies as scene entities", s.scene, s.bodies.len());
         self.scene = Some(s);
@@ -220,8 +256,10 @@ impl View<'_> {
                     return Ok(false);
                 };
                 self.check_scene(&v, link)?;
-                let meta = PartialMetadata::with_log_time(v.wall_time_ns());
-                let tf = frames::frame_transforms(&v, self.scene.as_ref());
+                self.n.poses_gaps.see(v.sequence());
+                let stamp = self.clock.stamp(v.sim_time(), v.wall_time_ns());
+                let meta = PartialMetadata::with_log_time(stamp);
+                let tf = frames::frame_transforms_at(&v, self.scene.as_ref(), stamp);
                 self.ch.tf.log_with_meta(&topics::encode(&tf), meta);
                 let json = tojson::pose_json(&v, self.scene.as_ref(), |_| true);
                 self.ch.poses.log_with_meta(&serde_json::to_vec(&json)?, meta);
@@ -233,8 +271,10 @@ impl View<'_> {
                     self.n.malformed += 1;
                     return Ok(false);
                 };
+                self.n.stats_gaps.see(s.sequence);
                 let json = serde_json::to_vec(&tojson::stats_json(&s))?;
-                self.ch.stats.log_with_meta(&json, PartialMetadata::with_log_time(r.recv_ns));
+                let stamp = self.clock.stamp(s.sim_time, r.recv_ns);
+                self.ch.stats.log_with_meta(&json, PartialMetadata::with_log_time(stamp));
                 self.n.stats += 1;
                 Ok(true)
             }
@@ -243,12 +283,14 @@ impl View<'_> {
                     self.n.malformed += 1;
                     return Ok(false);
                 };
-                let meta = PartialMetadata::with_log_time(r.recv_ns);
+                self.n.signals_gaps.see(s.sequence);
+                let stamp = self.clock.stamp(s.sim_time, r.recv_ns);
+                let meta = PartialMetadata::with_log_time(stamp);
                 let json = serde_json::to_vec(&fox::signals::signals_json(&s))?;
                 self.ch.signals.log_with_meta(&json, meta);
                 let json = serde_json::to_vec(&fox::signals::contacts_json(&s, self.scene.as_ref()))?;
                 self.ch.contacts.log_with_meta(&json, meta);
-                let arrows = fox::signals::contact_forces(&s, frames::timestamp(r.recv_ns));
+                let arrows = fox::signals::contact_forces(&s, frames::timestamp(stamp));
                 self.ch.contact_forces.log_with_meta(&topics::encode(&arrows), meta);
                 self.n.signals += 1;
                 Ok(true)
@@ -259,11 +301,95 @@ impl View<'_> {
                     return Ok(false);
                 };
                 let json = serde_json::to_vec(&fox::signals::events_json(&e))?;
-                self.ch.events.log_with_meta(&json, PartialMetadata::with_log_time(r.recv_ns));
+                let stamp = self.clock.stamp(e.sim_time, r.recv_ns);
+                self.ch.events.log_with_meta(&json, PartialMetadata::with_log_time(stamp));
                 self.n.events += 1;
                 Ok(true)
             }
             _ => Ok(false),
+        }
+    }
+}
+
+/// What the view lost, per stream: steps never received from the server (sequence gaps),
+/// frames its inbox dropped (all streams), messages a viewer's queue dropped (per topic).
+#[derive(Debug)]
+struct Health {
+    received: [(&'static str, u64, u64); 3],
+    inbox_dropped: u64,
+    viewers: Vec<(String, u64, u64)>,
+    clients: u64,
+}
+
+impl Health {
+    /// Everything lost: steps never received and messages dropped towards viewers.
+    fn lost(&self) -> u64 {
+        self.received.iter().map(|r| r.2).sum::<u64>() + self.viewers.iter().map(|v| v.2).sum::<u64>()
+    }
+
+    /// One line: the streams and topics that lost something.
+    fn summary(&self) -> String {
+        let mut parts: Vec<String> = self
+            .received
+            .iter()
+            .filter(|r| r.2 > 0)
+            .map(|r| format!("{} {} never received", r.0, r.2))
+            .collect();
+        parts.extend(
+            self.viewers.iter().filter(|v| v.2 > 0).map(|v| format!("{} {} dropped to viewers", v.0, v.2)),
+        );
+        parts.join(", ")
+    }
+
+    /// The `/pivotsim/view_health` message ([`topics::view_health`]).
+    fn json(&self) -> serde_json::Value {
+        let streams: serde_json::Map<String, serde_json::Value> = self
+            .received
+            .iter()
+            .map(|(s, n, g)| (s.to_string(), serde_json::json!({"received": n, "never_received": g})))
+            .collect();
+        let viewers: serde_json::Map<String, serde_json::Value> = self
+            .viewers
+            .iter()
+            .map(|(t, n, d)| (t.clone(), serde_json::json!({"relayed": n, "dropped": d})))
+            .collect();
+        serde_json::json!({
+            "streams": streams, "inbox_dropped": self.inbox_dropped, "viewers": viewers,
+            "clients": self.clients, "lost": self.lost(),
+        })
+    }
+
+    /// The end-of-run table.
+    fn table(&self) -> String {
+        let mut out =
+            String::from("pivotsim-client: per stream (from the server): received, never received\n");
+        for (s, n, g) in &self.received {
+            out.push_str(&format!("  {s:<10} {n:>10} {g:>8}\n"));
+        }
+        out.push_str(&format!("  (inbox dropped {} frames of all streams)\n", self.inbox_dropped));
+        out.push_str(&format!(
+            "pivotsim-client: per topic (to {} viewer connections): relayed, dropped\n",
+            self.clients
+        ));
+        for (t, n, d) in &self.viewers {
+            out.push_str(&format!("  {t:<28} {n:>10} {d:>8}\n"));
+        }
+        out
+    }
+}
+
+impl View<'_> {
+    fn health(&self, stream: &Stream, front: &Front) -> Health {
+        let n = &self.n;
+        Health {
+            received: [
+                ("poses", n.poses, n.poses_gaps.skipped),
+                ("stats", n.stats, n.stats_gaps.skipped),
+                ("signals", n.signals, n.signals_gaps.skipped),
+            ],
+            inbox_dropped: stream.inbox.dropped(),
+            viewers: front.delivery().snapshot(),
+            clients: front.delivery().clients(),
         }
     }
 }
@@ -291,17 +417,20 @@ pub fn run(common: &Common, args: &Args) -> Result<ExitCode> {
     let info = HashMap::from([("world".to_string(), world.to_string())]);
     let server = foxglove::WebSocketServer::new()
         .name(format!("pivotsim {world}"))
-        .bind(args.host.clone(), args.port)
+        // The SDK listens on loopback only, behind the relay (`fox::front`) that owns the view's
+        // address and also accepts `foxglove.websocket.v1`.
+        .bind("127.0.0.1", 0)
         .server_info(info)
         .listener(Arc::new(listener))
         .context(&ctx)
         .start_blocking()
-        .with_context(|| format!("foxglove: cannot serve on {}:{}", args.host, args.port))?;
+        .context("foxglove: cannot start the SDK's server on 127.0.0.1")?;
+    let front = Front::start(&args.host, args.port, SocketAddr::from(([127, 0, 0, 1], server.port())))?;
     eprintln!(
         "pivotsim-client: world `{world}` via {:?} on ws://{}:{} (Foxglove: Open connection → Foxglove WebSocket; Ctrl-C stops)",
         args.transport,
         args.host,
-        server.port()
+        front.addr().port()
     );
     let mut view = View {
         ch,
@@ -312,6 +441,7 @@ pub fn run(common: &Common, args: &Args) -> Result<ExitCode> {
         last_scene_ask: None,
         scene_retry: Duration::from_secs(1),
         common,
+        clock: args.clock,
         n: Counts::default(),
     };
     if let Some(s) = scene_best_effort(common, stream.zenoh(), common.timeout_or(2.0)) {
@@ -320,7 +450,9 @@ pub fn run(common: &Common, args: &Args) -> Result<ExitCode> {
         eprintln!("pivotsim-client: no scene description yet: no shapes until the server answers");
     }
     view.last_scene_ask = Some(Instant::now());
-    let outcome = serve(&stream, &mut view, common, args);
+    let outcome = serve(&stream, &mut view, &server, &front, common, args);
+    let health = view.health(&stream, &front);
+    drop(front);
     server.stop().wait_blocking();
     let n = &view.n;
     eprintln!(
@@ -331,18 +463,44 @@ pub fn run(common: &Common, args: &Args) -> Result<ExitCode> {
         n.events,
         n.scenes,
         n.malformed,
-        stream.inbox.dropped()
+        health.lost()
     );
+    eprint!("{}", health.table());
     outcome?;
     Ok(ExitCode::SUCCESS)
 }
 
-/// Republishes frames until Ctrl-C, `--duration`, `--count` or a silence of `--timeout`.
-fn serve(stream: &Stream, view: &mut View<'_>, common: &Common, args: &Args) -> Result<()> {
+/// Republishes frames until Ctrl-C, `--duration`, `--count` or a silence of `--timeout`; once a
+/// second, publishes the view's health (`/pivotsim/view_health`) and, when something was lost
+/// since, warns on stderr and in Foxglove's problems list (a status message).
+fn serve(
+    stream: &Stream,
+    view: &mut View<'_>,
+    server: &foxglove::WebSocketServerHandle,
+    front: &Front,
+    common: &Common,
+    args: &Args,
+) -> Result<()> {
     let end = args.duration.map(|d| Instant::now() + secs(d));
     let idle = common.timeout.map(secs);
     let mut last_frame = Instant::now();
+    let mut last_health = Instant::now();
+    let mut lost = 0;
     loop {
+        if last_health.elapsed() >= Duration::from_secs(1) {
+            last_health = Instant::now();
+            let h = view.health(stream, front);
+            let stamp = view.clock.stamp(view.last_sim_time, crate::net::now_ns());
+            view.ch
+                .health
+                .log_with_meta(&serde_json::to_vec(&h.json())?, PartialMetadata::with_log_time(stamp));
+            if h.lost() > lost {
+                lost = h.lost();
+                let msg = format!("live view: {} messages lost so far ({})", lost, h.summary());
+                eprintln!("pivotsim-client: {msg}");
+                server.publish_status(foxglove::websocket::Status::warning(msg).with_id("pivotsim-lost"));
+            }
+        }
         if interrupted()
             || end.is_some_and(|e| Instant::now() >= e)
             || args.count.is_some_and(|c| view.n.poses >= c)

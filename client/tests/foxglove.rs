@@ -259,7 +259,8 @@ fn foxglove_view_streams_the_forklift_moving() {
         );
         let Some(Message::Binary(b)) = next(&mut ws) else { continue };
         let (sub, stamp, payload) = message_data(&b);
-        assert!(stamp > 1_600_000_000_000_000_000, "timestamps are wall-clock ns: {stamp}");
+        // The simulation clock (the default `--clock sim`): ns of simulation time, as `/clock`.
+        assert!(stamp < 3_600_000_000_000, "timestamps are simulation-time ns: {stamp}");
         match sub {
             10 => {
                 tf_frames += 1;
@@ -335,4 +336,92 @@ fn foxglove_view_streams_the_forklift_moving() {
     view.interrupt();
     let out = view.wait().ok();
     assert!(out.stderr.contains("0 malformed"), "{}", out.stderr);
+    // The per-stream and per-topic loss tables.
+    assert!(out.stderr.contains("per stream (from the server)"), "{}", out.stderr);
+    assert!(out.stderr.contains("  /tf "), "{}", out.stderr);
+}
+
+/// An HTTP upgrade request offering `protocols` (tungstenite's client, no subprotocol logic).
+fn offer(port: u16, protocols: &str) -> Result<(WebSocket<TcpStream>, String), (u16, String)> {
+    let stream = TcpStream::connect(("127.0.0.1", port)).expect("connect");
+    stream.set_read_timeout(Some(Duration::from_millis(200))).unwrap();
+    let mut req = format!("ws://127.0.0.1:{port}").into_client_request().unwrap();
+    req.headers_mut().insert("Sec-WebSocket-Protocol", protocols.parse().unwrap());
+    match tungstenite::client::client(req, stream) {
+        Ok((ws, resp)) => {
+            let proto = resp.headers().get("Sec-WebSocket-Protocol").map(|v| v.to_str().unwrap().to_string());
+            Ok((ws, proto.unwrap_or_default()))
+        }
+        Err(tungstenite::HandshakeError::Failure(tungstenite::Error::Http(r))) => {
+            let body = r.body().as_ref().map(|b| String::from_utf8_lossy(b).into_owned()).unwrap_or_default();
+            Err((r.status().as_u16(), body))
+        }
+        Err(e) => panic!("handshake: {e}"),
+    }
+}
+
+/// A client that offers only the ws-protocol specification's name, `foxglove.websocket.v1` (as the
+/// `@foxglove/ws-protocol` npm client does), is answered with that name and gets the server info,
+/// the channels and transforms; a client offering no known name is refused with a 400 that names
+/// the subprotocol to offer.
+#[test]
+fn a_client_offering_only_websocket_v1_connects() {
+    let s = Server::start("pendulum", "foxv1");
+    let mut a = s.args();
+    a.extend(["--timeout", "30", "foxglove", "--port", "0", "--duration", "40"].map(String::from));
+    let view = spawn_client(&a, LIMIT);
+    view.wait_for_stderr("on ws://127.0.0.1:", Duration::from_secs(30));
+    let port = printed_port(&view.stderr_so_far());
+
+    let refused = offer(port, "foxglove.websocket.v2").err().expect("an unknown subprotocol is refused");
+    assert_eq!(refused.0, 400);
+    assert!(
+        refused.1.contains("foxglove.websocket.v1") && refused.1.contains("foxglove.sdk.v1"),
+        "{}",
+        refused.1
+    );
+
+    let (mut ws, proto) = offer(port, "foxglove.websocket.v1").expect("foxglove.websocket.v1 is accepted");
+    assert_eq!(proto, "foxglove.websocket.v1", "the server answers with the name the client offered");
+    let deadline = Instant::now() + Duration::from_secs(20);
+    let (mut info, mut tf) = (None, None);
+    while info.is_none() || tf.is_none() {
+        assert!(Instant::now() < deadline, "no serverInfo/advertise of /tf within 20 s");
+        if let Some(Message::Text(t)) = next(&mut ws) {
+            let v: Value = serde_json::from_str(t.as_str()).unwrap();
+            match v["op"].as_str() {
+                Some("serverInfo") => info = Some(v),
+                Some("advertise") => {
+                    tf =
+                        tf.or(v["channels"].as_array().unwrap().iter().find(|c| c["topic"] == "/tf").cloned())
+                }
+                _ => {}
+            }
+        }
+    }
+    assert_eq!(info.unwrap()["metadata"]["world"], s.world.as_str());
+    let tf = tf.unwrap();
+    let subscribe = json!({"op": "subscribe", "subscriptions": [{"id": 1, "channelId": tf["id"]}]});
+    ws.send(Message::Text(subscribe.to_string().into())).unwrap();
+    let mut frames = 0;
+    while frames < 20 {
+        assert!(Instant::now() < deadline, "{frames} transform frames within 20 s");
+        if let Some(Message::Binary(b)) = next(&mut ws) {
+            let (sub, _, payload) = message_data(&b);
+            assert_eq!(sub, 1);
+            assert!(!transforms(payload).is_empty());
+            frames += 1;
+        }
+    }
+    drop(ws);
+    view.interrupt();
+    let out = view.wait().ok();
+    // The relay counted what it forwarded on /tf, and the view says what it lost.
+    let row = out
+        .stderr
+        .lines()
+        .find(|l| l.trim_start().starts_with("/tf "))
+        .unwrap_or_else(|| panic!("{}", out.stderr));
+    let relayed: u64 = row.split_whitespace().nth(1).unwrap().parse().unwrap();
+    assert!(relayed >= 20, "{row}");
 }

@@ -12,13 +12,32 @@ pub fn timestamp(ns: u64) -> Timestamp {
     Timestamp::new(sec, (ns % 1_000_000_000) as u32)
 }
 
+/// A simulation time (s) as ns, the stamp of the simulation clock (`/clock` on the ROS 2 path):
+/// negative or not finite is 0, past 2106 saturates.
+pub fn sim_ns(sim_time: f64) -> u64 {
+    if sim_time.is_finite() && sim_time > 0.0 {
+        (sim_time * 1e9).round().min(u64::MAX as f64) as u64
+    } else {
+        0
+    }
+}
+
 /// One transform `world` → body name per body of the frame, stamped with the server's wall time
 /// (bodies the scene does not name are `body<id>`).
 pub fn frame_transforms(
     v: &msgs::PoseFrameView<'_>,
     scene: Option<&msgs::SceneDescription>,
 ) -> FrameTransforms {
-    let stamp = timestamp(v.wall_time_ns());
+    frame_transforms_at(v, scene, v.wall_time_ns())
+}
+
+/// [`frame_transforms`] stamped with `stamp_ns`.
+pub fn frame_transforms_at(
+    v: &msgs::PoseFrameView<'_>,
+    scene: Option<&msgs::SceneDescription>,
+    stamp_ns: u64,
+) -> FrameTransforms {
+    let stamp = timestamp(stamp_ns);
     FrameTransforms {
         transforms: v
             .bodies()
@@ -64,5 +83,14 @@ mod tests {
         assert_eq!(t.transforms[1].rotation.unwrap().w, 1.0);
         let s = t.transforms[0].timestamp.unwrap();
         assert_eq!((s.sec(), s.nsec()), (1, 500_000_007));
+        let s = frame_transforms_at(&v, None, sim_ns(v.sim_time())).transforms[1].timestamp.unwrap();
+        assert_eq!((s.sec(), s.nsec()), (0, 50_000_000));
+    }
+
+    #[test]
+    fn simulation_time_in_ns() {
+        assert_eq!(sim_ns(1.5), 1_500_000_000);
+        assert_eq!(sim_ns(0.001), 1_000_000);
+        assert_eq!((sim_ns(-1.0), sim_ns(f64::NAN), sim_ns(f64::INFINITY)), (0, 0, 0));
     }
 }

@@ -3,6 +3,7 @@
 //! transforms, the signals and events frames as JSON.
 
 pub mod frames;
+pub mod front;
 pub mod scene;
 pub mod signals;
 pub mod topics;

@@ -15,6 +15,7 @@
 //! | `/pivotsim/contacts` | json | `pivotsim.Contacts` | every step: per contact the bodies, stick/slip/open, normal and friction force |
 //! | `/pivotsim/contact_forces` | protobuf | `foxglove.SceneUpdate` | every step: the contact forces as arrows at the contact points (world frame) |
 //! | `/pivotsim/events` | json | `pivotsim.Events` | each step that has events: name, kind, time, value, level |
+//! | `/pivotsim/view_health` | json | `pivotsim.ViewHealth` | once a second (live view only): steps never received per stream, messages dropped towards viewers per topic, `lost` |
 //! | `/pivotsim/cmd/joystick`, `…/winch`, `…/boom`, `…/actuator` | json | `pivotsim.Joystick`, … | operator inputs as seen (`record` only) |
 //!
 //! The signals, contacts and events messages are those of [`super::signals`].
@@ -42,6 +43,8 @@ pub const CONTACTS: &str = "/pivotsim/contacts";
 pub const CONTACT_FORCES: &str = "/pivotsim/contact_forces";
 /// The events frames as JSON.
 pub const EVENTS: &str = "/pivotsim/events";
+/// The live view's losses (live view only).
+pub const VIEW_HEALTH: &str = "/pivotsim/view_health";
 
 /// A channel: topic, message encoding and schema.
 #[derive(Debug, Clone)]
@@ -115,6 +118,30 @@ pub fn contact_forces() -> ChannelSpec {
 /// `/pivotsim/events`: `pivotsim.Events` (JSON).
 pub fn events() -> ChannelSpec {
     json(EVENTS, "pivotsim.Events", &super::signals::events_schema())
+}
+
+/// `/pivotsim/view_health`: `pivotsim.ViewHealth` (JSON, live view only, once a second): per
+/// stream the frames received and the steps never received, the inbox's drops, per topic the
+/// messages relayed to and dropped towards viewers, and `lost` (all of it).
+pub fn view_health() -> ChannelSpec {
+    let count = serde_json::json!({"type": "integer", "minimum": 0});
+    let stream =
+        serde_json::json!({"type": "object", "properties": {"received": count, "never_received": count}});
+    let topic = serde_json::json!({"type": "object", "properties": {"relayed": count, "dropped": count}});
+    json(
+        VIEW_HEALTH,
+        "pivotsim.ViewHealth",
+        &serde_json::json!({
+            "type": "object",
+            "properties": {
+                "streams": {"type": "object", "properties": {"poses": stream, "stats": stream, "signals": stream}},
+                "inbox_dropped": count,
+                "viewers": {"type": "object", "additionalProperties": topic},
+                "clients": count,
+                "lost": count,
+            },
+        }),
+    )
 }
 
 /// `/pivotsim/cmd/<input>`: the input topic's JSON channel.
