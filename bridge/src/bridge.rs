@@ -1,8 +1,8 @@
 //! The bridge loop. Two threads: the main loop waits for the newest frames from the server and
-//! publishes them to ROS (`/tf`, `/pivotsim/poses`, `/clock` per pose frame; `/tf_static` (static
+//! publishes them to ROS (`/tf`, `/pivotsim/pose_array`, `/clock` per pose frame; `/tf_static` (static
 //! bodies and the joint frames of the joint, cylinder and drum sensors) and `/pivotsim/markers`
-//! per scene; `/pivotsim/signals`, the wrenches and
-//! `/pivotsim/contact_markers` per signals frame; `/rosout` per event; `/pivotsim/stats` on a
+//! per scene; `/pivotsim/signal_values`, the wrenches and
+//! `/pivotsim/contact_markers` per signals frame; `/rosout` per event; `/pivotsim/diagnostics` on a
 //! timer), and the joy thread waits on the `/joy` subscription and forwards each valid message to
 //! the server at once.
 
@@ -277,7 +277,7 @@ impl Bridge<'_> {
         }
     }
 
-    /// A pose frame: `/tf`, `/tf_static` (once per scene), `/pivotsim/poses` and `/clock`.
+    /// A pose frame: `/tf`, `/tf_static` (once per scene), `/pivotsim/pose_array` and `/clock`.
     fn on_poses(&mut self, bytes: &[u8]) {
         if let Err(e) = self.frame.decode_into(bytes) {
             warn!("pose frame: {e}");
@@ -360,7 +360,7 @@ impl Bridge<'_> {
         self.layout = Some(layout);
     }
 
-    /// A signals frame: `/pivotsim/signals`, a wrench per force sensor and the contact arrows. A
+    /// A signals frame: `/pivotsim/signal_values`, a wrench per force sensor and the contact arrows. A
     /// frame that does not decode is counted and dropped.
     fn on_signals(&mut self, bytes: &[u8]) {
         if let Err(e) = self.signals_scratch.decode_into(bytes) {
@@ -463,7 +463,7 @@ impl Bridge<'_> {
         }
     }
 
-    /// The timers: markers again (late joiners), `/pivotsim/stats`, the log line.
+    /// The timers: markers again (late joiners), `/pivotsim/diagnostics`, the log line.
     fn on_timers(&mut self, now: Instant) {
         if now >= self.next_markers {
             if let Some(s) = &self.scene {

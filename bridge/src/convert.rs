@@ -7,7 +7,7 @@ use pivotsim_msgs as msgs;
 
 use crate::ros_msgs::*;
 
-/// Which clock stamps `/tf`, `/pivotsim/poses` and the diagnostics.
+/// Which clock stamps `/tf`, `/pivotsim/pose_array` and the diagnostics.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum StampSource {
     /// Simulation time (as on `/clock`; ROS nodes run with `use_sim_time:=true`).
@@ -88,7 +88,7 @@ pub fn transforms(
     (moving, fixed)
 }
 
-/// `/pivotsim/poses`: every body's pose in the pose frame's order, in `world_frame`.
+/// `/pivotsim/pose_array`: every body's pose in the pose frame's order, in `world_frame`.
 pub fn pose_array(frame: &msgs::PoseFrame, stamp: Time, world_frame: &str) -> PoseArray {
     PoseArray {
         header: Header { stamp, frame_id: world_frame.to_string() },
@@ -206,7 +206,7 @@ fn triangles(points: &mut Vec<Point>, v: &[[f64; 3]], tris: impl Iterator<Item =
 /// transform). Shapes given by reference: meshes as `MESH_RESOURCE` with the reference as URI,
 /// heightfields not drawn.
 pub fn body_markers(body: &msgs::BodyInfo, out: &mut Vec<Marker>) {
-    for (ci, c) in body.colliders.iter().enumerate() {
+    for (ci, c) in body.shapes().enumerate() {
         let id = 4 * ci as i32;
         let (p, q) = (c.position, c.orientation);
         match &c.shape {
@@ -421,7 +421,7 @@ impl JoyTranslator {
 pub const WRENCH_TOPIC_PREFIX: &str = "/pivotsim/signals/";
 
 /// At most this many wrench topics (publishers) exist at once; further force sensors are
-/// counted in the bridge status (`wrench_sensors_refused`) and stay in `/pivotsim/signals`.
+/// counted in the bridge status (`wrench_sensors_refused`) and stay in `/pivotsim/signal_values`.
 pub const MAX_WRENCH_TOPICS: usize = 64;
 
 /// A sensor name as one ROS topic-name token (ROS 2 name rules: `[A-Za-z0-9_]`, not starting
@@ -597,15 +597,11 @@ impl SignalLayout {
             && self.names.iter().zip(&frame.channels).all(|(n, c)| *n == c.name)
     }
 
-    /// The channel names, one per line, line `i` naming `data[i]` of `/pivotsim/signals`
+    /// The channel names, one per line, line `i` naming `data[i]` of `/pivotsim/signal_values`
     /// (published latched on `/pivotsim/signal_names`).
     pub fn names_text(&self) -> String {
-        let mut t = String::new();
-        for n in &self.names {
-            t.push_str(n.as_str());
-            t.push('\n');
-        }
-        t
+        let names: Vec<&str> = self.names.iter().map(|n| n.as_str()).collect();
+        names.join("\n")
     }
 }
 
@@ -675,7 +671,7 @@ pub fn wrench(
     })
 }
 
-/// `/pivotsim/signals`: every channel's value in channel order (`data[i]` is line `i` of
+/// `/pivotsim/signal_values`: every channel's value in channel order (`data[i]` is line `i` of
 /// `/pivotsim/signal_names`), NaN while a channel drops out (a gap in a plot); one dimension
 /// labelled `channels`. Reuses `out`'s vectors.
 pub fn signals_array(frame: &msgs::SignalsFrame, out: &mut Float64MultiArray) {
@@ -777,13 +773,13 @@ fn kv(key: impl Into<String>, value: impl ToString) -> KeyValue {
     KeyValue { key: key.into(), value: value.to_string() }
 }
 
-/// Name of the solver status in `/pivotsim/stats`.
+/// Name of the solver status in `/pivotsim/diagnostics`.
 pub const DIAG_SOLVER: &str = "pivotsim: solver";
-/// Name of the server's input status in `/pivotsim/stats`.
+/// Name of the server's input status in `/pivotsim/diagnostics`.
 pub const DIAG_INPUTS: &str = "pivotsim: inputs";
-/// Name of the signals status in `/pivotsim/stats`: every channel `{sensor}/{channel}` → value.
+/// Name of the signals status in `/pivotsim/diagnostics`: every channel `{sensor}/{channel}` → value.
 pub const DIAG_SIGNALS: &str = "pivotsim: signals";
-/// Name of the bridge's own status in `/pivotsim/stats`.
+/// Name of the bridge's own status in `/pivotsim/diagnostics`.
 pub const DIAG_BRIDGE: &str = "pivotsim-ros2-bridge";
 
 /// What the bridge reports about itself.
@@ -832,7 +828,7 @@ pub struct SignalCounters {
     pub wrench_sensors_refused: u64,
 }
 
-/// `/pivotsim/stats`: the server's solver and input statistics (from its latest stats frame, if
+/// `/pivotsim/diagnostics`: the server's solver and input statistics (from its latest stats frame, if
 /// any), its sensor channels (from its latest signals frame, if any) and the bridge's own counters.
 pub fn diagnostics(
     stats: Option<&msgs::SolverStats>,
@@ -892,6 +888,12 @@ pub fn diagnostics(
                 .map(|c| kv(c.name.as_str(), if c.dropout { "dropout".into() } else { c.value.to_string() })),
         );
         values.push(kv("contacts", f.contacts.len()));
+        for (key, state) in
+            [("contacts_stick", msgs::ContactCode::Stick), ("contacts_slip", msgs::ContactCode::Slip)]
+        {
+            values.push(kv(key, f.contacts.iter().filter(|c| c.state == state).count()));
+        }
+        values.push(kv("dropout_count", dropouts));
         values.push(kv("events_total", f.events_total));
         values.push(kv("faults_applied", f.faults_applied));
         values.push(kv("faults_rejected", f.faults_rejected));
@@ -1030,6 +1032,7 @@ mod tests {
             name: "hook".into(),
             kind: msgs::BodyKind::Dynamic,
             mass: 1.0,
+            visuals: Vec::new(),
             colliders: vec![
                 col(msgs::Shape::Box { half_extents: [1.0, 2.0, 3.0] }),
                 col(msgs::Shape::Capsule { radius: 0.1, half_height: 0.2 }),
@@ -1166,7 +1169,7 @@ mod tests {
         assert_eq!(l.wrenches[0].frame_id("world"), "joint_frame/hoist_rope");
         assert_eq!(l.wrenches[1].frame_id("map"), "map");
         let names = l.names_text();
-        assert_eq!(names.lines().count(), 14);
+        assert_eq!(names.split('\n').count(), 14, "one line per channel, no trailing newline");
         assert_eq!(names.lines().nth(12), Some("rope/tension"));
         // Another order of the same names is another layout.
         let mut g = f.clone();
@@ -1190,6 +1193,7 @@ mod tests {
             name: name.into(),
             kind,
             mass: if kind == msgs::BodyKind::Dynamic { 1.0 } else { 0.0 },
+            visuals: Vec::new(),
             colliders: vec![],
         };
         let h = std::f64::consts::FRAC_1_SQRT_2;
@@ -1517,12 +1521,15 @@ mod tests {
         assert_eq!(s.level, DiagnosticStatus::OK);
         assert_eq!(s.value("support/fz"), Some("98.1"));
         assert_eq!(s.value("contacts"), Some("3"));
+        assert_eq!((s.value("contacts_stick"), s.value("contacts_slip")), (Some("1"), Some("1")));
+        assert_eq!(s.value("dropout_count"), Some("0"));
         let b = a.get(DIAG_BRIDGE).unwrap();
         assert_eq!((b.value("signals_decode_failed"), b.value("wrench_topics")), (Some("3"), Some("2")));
         f.channels[12] = msgs::SignalChannel { dropout: true, value: 0.0, ..f.channels[12] };
         let a = diagnostics(None, Some(&f), &h, Time::default());
         let s = a.get(DIAG_SIGNALS).unwrap();
         assert_eq!((s.level, s.value("rope/tension")), (DiagnosticStatus::WARN, Some("dropout")));
+        assert_eq!(s.value("dropout_count"), Some("1"));
         assert!(diagnostics(None, None, &h, Time::default()).get(DIAG_SIGNALS).is_none());
     }
 }

@@ -40,7 +40,7 @@ pub fn node(context: &Context, name: &str) -> anyhow::Result<Node> {
         .map_err(|e| anyhow!("ROS node: {e:?}"))
 }
 
-/// A topic of type `M` named `name` (absolute, e.g. `/pivotsim/poses`).
+/// A topic of type `M` named `name` (absolute, e.g. `/pivotsim/pose_array`).
 pub fn topic<M: RosType>(
     node: &mut Node,
     name: &str,
@@ -56,7 +56,7 @@ pub fn topic<M: RosType>(
 pub mod qos {
     use super::*;
 
-    /// Streams at the step rate (`/tf`, `/pivotsim/poses`, `/clock`): reliable (tf2 listeners and
+    /// Streams at the step rate (`/tf`, `/pivotsim/pose_array`, `/clock`): reliable (tf2 listeners and
     /// RViz subscribe reliably; best-effort subscribers match too), volatile, keep the last 100
     /// (tf2's broadcaster depth); a full send window drops the message instead of waiting, so a
     /// stuck subscriber never slows the bridge.

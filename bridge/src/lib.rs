@@ -3,10 +3,10 @@
 //!
 //! The bridge is a separate process and a Zenoh client of the server: it subscribes to
 //! `pivotsim/<world>/poses`, `…/stats`, `…/signals` and `…/events`, queries `…/scene` for body
-//! names and shapes, and publishes `/tf`, `/tf_static`, `/pivotsim/poses`, `/pivotsim/markers`,
-//! `/pivotsim/stats` and `/clock`; the server's operator signals as a
+//! names and shapes, and publishes `/tf`, `/tf_static`, `/pivotsim/pose_array`, `/pivotsim/markers`,
+//! `/pivotsim/diagnostics` and `/clock`; the server's operator signals as a
 //! `geometry_msgs/WrenchStamped` per force sensor (`/pivotsim/signals/<sensor>`), every channel
-//! in one `std_msgs/Float64MultiArray` (`/pivotsim/signals`, names on `/pivotsim/signal_names`),
+//! in one `std_msgs/Float64MultiArray` (`/pivotsim/signal_values`, names on `/pivotsim/signal_names`),
 //! the contact states as coloured arrows (`/pivotsim/contact_markers`) and each event as a line on
 //! `/rosout`; it subscribes to `/joy` and puts each valid `sensor_msgs/Joy` as a joystick frame of its
 //! own source on `pivotsim/<world>/cmd/joystick`, where the server applies the scene's joystick
@@ -48,23 +48,49 @@ pub mod topics {
     /// Transforms of the static bodies.
     pub const TF_STATIC: &str = "/tf_static";
     /// Every body's pose.
-    pub const POSES: &str = "/pivotsim/poses";
+    pub const POSES: &str = "/pivotsim/pose_array";
     /// The bodies' shapes.
     pub const MARKERS: &str = "/pivotsim/markers";
     /// Solver, input and bridge diagnostics.
-    pub const STATS: &str = "/pivotsim/stats";
+    pub const STATS: &str = "/pivotsim/diagnostics";
     /// Simulation time.
     pub const CLOCK: &str = "/clock";
     /// Operator input (default; `--joy-topic`).
     pub const JOY: &str = "/joy";
     /// Every signal channel's value, in channel order.
-    pub const SIGNALS: &str = "/pivotsim/signals";
+    pub const SIGNALS: &str = "/pivotsim/signal_values";
     /// The channel names of `SIGNALS`, one per line (latched).
     pub const SIGNAL_NAMES: &str = "/pivotsim/signal_names";
     /// Contact states as arrows.
     pub const CONTACT_MARKERS: &str = "/pivotsim/contact_markers";
     /// Events as log lines.
     pub const ROSOUT: &str = "/rosout";
+    /// Prefix of the per-sensor wrench topics ([`wrench`]), each `geometry_msgs/msg/WrenchStamped`.
+    pub const WRENCH_PREFIX: &str = crate::convert::WRENCH_TOPIC_PREFIX;
+
+    /// Every topic the bridge publishes with its ROS type (`package/msg/Name`), but the
+    /// per-sensor wrenches ([`WRENCH_PREFIX`]): what a layout of this path may name. None of these
+    /// names carries another type on the live view and recording path (`pivotsim-client
+    /// foxglove`/`record`) but `/tf`, each path's transform tree (`client/README.md`).
+    pub fn published() -> Vec<(&'static str, String)> {
+        use crate::ros_msgs::*;
+        fn ty<M: RosType>() -> String {
+            format!("{}/msg/{}", M::PACKAGE, M::NAME)
+        }
+        vec![
+            (TF, ty::<TFMessage>()),
+            (TF_STATIC, ty::<TFMessage>()),
+            (POSES, ty::<PoseArray>()),
+            (MARKERS, ty::<MarkerArray>()),
+            (STATS, ty::<DiagnosticArray>()),
+            (CLOCK, ty::<Clock>()),
+            (SIGNALS, ty::<Float64MultiArray>()),
+            (SIGNAL_NAMES, ty::<RosString>()),
+            (CONTACT_MARKERS, ty::<MarkerArray>()),
+            (ROSOUT, ty::<Log>()),
+        ]
+    }
+
     /// The wrench topic of a force sensor named `sensor` (sanitized: [`crate::convert::topic_token`];
     /// the bridge adds `_2`, `_3`, … when two names sanitize alike).
     pub fn wrench(sensor: &str) -> String {
@@ -93,7 +119,7 @@ pub struct BridgeConfig {
     pub joy_topic: String,
     /// Node name.
     pub node_name: String,
-    /// Period of `/pivotsim/stats`.
+    /// Period of `/pivotsim/diagnostics`.
     pub stats_period: Duration,
     /// Period at which the markers are sent again (for subscribers without transient-local
     /// durability).

@@ -16,8 +16,8 @@ enum Stamp {
     Wall,
 }
 
-/// Bridge a pivotsim world to ROS 2: /tf, /tf_static, /pivotsim/poses, /pivotsim/markers,
-/// /pivotsim/stats, /clock, the signals (/pivotsim/signals, /pivotsim/signals/<sensor> wrenches,
+/// Bridge a pivotsim world to ROS 2: /tf, /tf_static, /pivotsim/pose_array, /pivotsim/markers,
+/// /pivotsim/diagnostics, /clock, the signals (/pivotsim/signal_values, /pivotsim/signals/<sensor> wrenches,
 /// /pivotsim/contact_markers) and events (/rosout) out, /joy in. No ROS installation needed.
 #[derive(Debug, Parser)]
 #[command(version, about)]
@@ -50,7 +50,7 @@ struct Cli {
     /// ROS node name.
     #[arg(long, default_value = "pivotsim_bridge")]
     node_name: String,
-    /// /pivotsim/stats rate (Hz), 0.01 to 1000.
+    /// /pivotsim/diagnostics rate (Hz), 0.01 to 1000.
     #[arg(long, allow_negative_numbers = true, default_value_t = 10.0, value_parser = stats_rate)]
     stats_rate: f64,
     /// Joystick source id of the forwarded frames (default: random).
@@ -89,12 +89,16 @@ fn log_interval(s: &str) -> Result<f64, String> {
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
+    // RustDDS's UDP listener logs one ERROR of its own, "leave_multicast_group", when a socket
+    // that never joined its multicast group (`--dds-interface 127.0.0.1`: no multicast interface)
+    // closes at shutdown; it is its module's only error, so that module is silenced by default.
     let _ = tracing_subscriber::fmt()
-        .with_env_filter(
-            tracing_subscriber::EnvFilter::try_from_default_env()
-                .unwrap_or_else(|_| "info,zenoh=warn,rustdds=error,ros2_client=warn".into()),
-        )
+        .with_env_filter(tracing_subscriber::EnvFilter::try_from_default_env().unwrap_or_else(|_| {
+            "info,zenoh=warn,rustdds=error,rustdds::network::udp_listener=off,ros2_client=warn".into()
+        }))
         .with_writer(std::io::stderr)
+        // Colours only on a terminal: a log file or a pipe gets plain text.
+        .with_ansi(std::io::IsTerminal::is_terminal(&std::io::stderr()))
         .try_init();
     let domain_id = match cli.domain_id {
         Some(d) => d,

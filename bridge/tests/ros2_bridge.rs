@@ -4,15 +4,15 @@
 //! the localhost discovery ports: no multicast needed on `lo`). Every wait is bounded.
 //!
 //! - `/tf` carries every moving body's frame and `/tf_static` the static one, with transforms
-//!   equal to the Zenoh pose frame of the same simulation time; `/pivotsim/poses`, `/clock` and
+//!   equal to the Zenoh pose frame of the same simulation time; `/pivotsim/pose_array`, `/clock` and
 //!   the markers arrive too.
 //! - A `/joy` stream moves the driven joint; when it stops, the server's deadman trips.
 //! - Malformed `/joy` (33 axes, a NaN axis) is rejected and counted by the bridge (its
-//!   diagnostics on `/pivotsim/stats`) and never reaches the server.
+//!   diagnostics on `/pivotsim/diagnostics`) and never reaches the server.
 //! - The operator signals: a hanging load's joint reaction arrives as a `WrenchStamped` in the
 //!   joint's frame, which `/tf_static` places under the load, and turned into the world with the
 //!   transforms it is (0, 0, m·g); a resting crate's support force arrives in `world` as m·g;
-//!   every channel on `/pivotsim/signals`, the crate's contacts as arrows, a live fault as a
+//!   every channel on `/pivotsim/signal_values`, the crate's contacts as arrows, a live fault as a
 //!   `/rosout` line, and a malformed signals frame is counted without stopping anything.
 
 #![cfg(feature = "ros2")]
@@ -397,7 +397,7 @@ fn tf_carries_every_body_frame_with_the_zenoh_poses() {
     // Every body has a frame on /tf or /tf_static.
     let all: BTreeSet<&str> = names.keys().copied().collect();
     assert_eq!(all, BTreeSet::from(["base", "drum", "hook"]));
-    // /pivotsim/poses: every body, in the frame's order, equal to the Zenoh frame.
+    // /pivotsim/pose_array: every body, in the frame's order, equal to the Zenoh frame.
     let mut pose_matched = 0;
     for (p, _) in &poses {
         assert_eq!(p.header.frame_id, "world");
@@ -601,6 +601,7 @@ fn bridge_waits_for_a_late_server_and_never_slows_it() {
     let child = Command::new(env!("CARGO_BIN_EXE_pivotsim-ros2-bridge"))
         .args(["--world", &world, "--connect", &endpoint])
         .args(["--domain-id", &d.to_string(), "--dds-interface", "127.0.0.1", "--stats-rate", "20"])
+        .env_remove("RUST_LOG") // its default log filter
         .stdout(Stdio::null())
         .stderr(std::fs::File::create(&log).unwrap())
         .spawn()
@@ -660,6 +661,25 @@ fn bridge_waits_for_a_late_server_and_never_slows_it() {
     assert_eq!(a.get(DIAG_BRIDGE).unwrap().level, DiagnosticStatus::OK);
     assert!(a.get(DIAG_INPUTS).is_some());
     eprintln!("late server: bridged; server at {rate:.1} steps/s with a stalled /tf subscriber");
+    // Stopped as a user stops it (SIGTERM, as Ctrl-C), confined to loopback DDS: it exits within
+    // 10 s, and its log (a file) has no ERROR line (RustDDS's "leave_multicast_group" for sockets
+    // that joined no group) and no colour codes.
+    let mut bridge = bridge;
+    let pid = bridge.child.id().to_string();
+    assert!(Command::new("kill").args(["-TERM", &pid]).status().unwrap().success());
+    let deadline = Instant::now() + Duration::from_secs(10);
+    let status = loop {
+        if let Some(s) = bridge.child.try_wait().unwrap() {
+            break s;
+        }
+        assert!(Instant::now() < deadline, "the bridge did not stop within 10 s of SIGTERM");
+        std::thread::sleep(Duration::from_millis(20));
+    };
+    let log = bridge.log();
+    assert!(status.success(), "{status:?}: {log}");
+    assert!(log.contains(" INFO "), "{log}");
+    assert!(!log.contains("ERROR"), "an ERROR on shutdown: {log}");
+    assert!(!log.contains('\u{1b}'), "colour codes in a log file: {log:?}");
     drop(bridge);
 }
 
@@ -814,8 +834,10 @@ fn signals_reach_ros_as_wrenches_arrays_arrows_and_log_lines() {
     // Stamped with simulation time, increasing.
     assert!(rope.windows(2).all(|w| w[1].0.header.stamp > w[0].0.header.stamp));
 
-    // Every channel on /pivotsim/signals, named by line on /pivotsim/signal_names.
-    let names: Vec<String> = names.last().unwrap().0.data.lines().map(str::to_string).collect();
+    // Every channel on /pivotsim/signal_values, named by line on /pivotsim/signal_names.
+    let text = &names.last().unwrap().0.data;
+    // One line per channel: split at '\n' (not `lines()`, which forgives a trailing newline).
+    let names: Vec<String> = text.split('\n').map(str::to_string).collect();
     let at = |n: &str| names.iter().position(|x| x == n).unwrap_or_else(|| panic!("{n} in {names:?}"));
     let (tension, fz) = (at("rope/tension"), at("support/fz"));
     let last = &arrays.last().unwrap().0;
@@ -824,7 +846,7 @@ fn signals_reach_ros_as_wrenches_arrays_arrows_and_log_lines() {
         (last.layout.dim[0].label.as_str(), last.layout.dim[0].size as usize),
         ("channels", names.len())
     );
-    assert_eq!(last.data.len(), names.len());
+    assert_eq!(last.data.len(), names.len(), "{text:?}");
     assert!(close(last.data[tension], m_load * G, 1e-6), "tension {}", last.data[tension]);
     assert!(close(last.data[fz], m_crate * G, 1e-6), "support/fz {}", last.data[fz]);
 

@@ -58,7 +58,7 @@ pub fn summary(d: &msgs::SceneDescription) -> String {
     for b in &d.bodies {
         let kind = format!("{:?}", b.kind).to_lowercase();
         let mass = if b.kind == msgs::BodyKind::Dynamic { format!("{} kg", b.mass) } else { String::new() };
-        let shapes: Vec<String> = b.colliders.iter().map(|c| shape_summary(&c.shape)).collect();
+        let shapes: Vec<String> = b.shapes().map(|c| shape_summary(&c.shape)).collect();
         let _ = writeln!(s, "  {:>4}  {:<20} {:<9} {:>10}  {}", b.id, b.name, kind, mass, shapes.join(", "));
     }
     let _ = writeln!(s, "\njoints ({}):", d.joints.len());

@@ -205,7 +205,7 @@ pub fn scene_schema() -> Value {
         "shape": {"oneOf": shapes}, "position": nums(3), "orientation": nums(4)}});
     let body = json!({"type": "object", "properties": {
         "id": int, "name": s, "kind": names(&["dynamic", "kinematic", "static"]), "mass": num,
-        "colliders": {"type": "array", "items": collider}}});
+        "colliders": {"type": "array", "items": collider}, "visuals": {"type": "array", "items": collider}}});
     let frame = json!({"type": "object", "properties": {
         "body": {"type": ["integer", "null"]}, "position": nums(3), "orientation": nums(4)}});
     let joint = json!({"type": "object", "properties": {
@@ -294,6 +294,7 @@ mod tests {
                 name: "b".into(),
                 kind: msgs::BodyKind::Dynamic,
                 mass: 1.0,
+                visuals: Vec::new(),
                 colliders: vec![msgs::Collider {
                     shape: msgs::Shape::Ball { radius: 0.5 },
                     position: [0.0; 3],

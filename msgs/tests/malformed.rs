@@ -490,6 +490,18 @@ fn scene_errors() {
     check(&|s| s.bodies[1].colliders = vec![s.bodies[1].colliders[0].clone(); 65], &|e| {
         matches!(e, SceneError::TooMany { count: 65, max: 64, .. })
     });
+    // Visual-only shapes are checked as colliders are, under their own path.
+    check(
+        &|s| {
+            s.bodies[1].visuals =
+                vec![Collider { shape: Shape::Ball { radius: -1.0 }, ..s.bodies[1].colliders[0].clone() }]
+        },
+        &|e| matches!(e, SceneError::NonPositive { path, .. } if path == "bodies[1].visuals[0].shape.radius"),
+    );
+    check(
+        &|s| s.bodies[1].visuals = vec![s.bodies[1].colliders[0].clone(); 65],
+        &|e| matches!(e, SceneError::TooMany { count: 65, max: 64, path } if path == "bodies[1].visuals"),
+    );
     check(&|s| s.joints[0].child = 99, &|e| matches!(e, SceneError::UnknownBody { id: 99, .. }));
     check(&|s| s.joints[0].parent = Some(1), &|e| matches!(e, SceneError::SelfJoint { .. }));
     check(&|s| s.actuators[0].joint = Some("nope".into()), &|e| matches!(e, SceneError::UnknownJoint { .. }));

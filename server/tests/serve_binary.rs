@@ -84,15 +84,21 @@ fn a_server_killed_with_sigkill_restarts_cleanly() {
 }
 
 /// The README's main command: no subcommand serves the default scene, and says on start where it
-/// listens, which scene and transports are up, and how to connect.
+/// listens, which scene and transports are up, and how to connect; its log on a pipe has no
+/// colour codes.
 #[test]
 fn the_default_command_serves_the_default_scene() {
     let endpoint = pivotsim_tests::free_endpoint();
     let out = std::process::Command::new(env!("CARGO_BIN_EXE_pivotsim-server"))
         .args(["--steps", "30", "--fast", "--no-iceoryx2", "--listen", &endpoint])
+        .env("RUST_LOG", "info")
         .output()
         .unwrap();
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let log = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{log}");
+    // Its log, written to a pipe, is plain text: levels without ANSI colour codes.
+    assert!(log.contains(" INFO "), "{log}");
+    assert!(!log.contains('\u{1b}'), "colour codes in a piped log: {log:?}");
     let text = String::from_utf8_lossy(&out.stdout);
     let start = text.lines().next().unwrap_or_default();
     assert!(start.contains("scene `forklift`") && start.contains("world `default`"), "{text}");

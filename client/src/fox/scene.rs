@@ -267,7 +267,7 @@ pub fn scene_update(scene: &msgs::SceneDescription, stamp: Timestamp) -> SceneSh
                 ],
                 ..SceneEntity::default()
             };
-            for c in &b.colliders {
+            for c in b.shapes() {
                 if !collider(&mut e, c, color(b.kind)) {
                     skipped += 1;
                 }
@@ -295,20 +295,25 @@ fn x_onto(d: [f64; 3]) -> [f64; 4] {
     if n < 1e-12 { [0.0, 0.0, 1.0, 0.0] } else { q.map(|c| c / n.sqrt()) }
 }
 
+/// Colour of a sticking contact's arrow: green, as the ROS 2 bridge's `/pivotsim/contact_markers`.
+pub const STICK_COLOR: Color = Color { r: 0.1, g: 0.8, b: 0.1, a: 1.0 };
+/// Colour of a slipping contact's arrow: orange, as the ROS 2 bridge's.
+pub const SLIP_COLOR: Color = Color { r: 1.0, g: 0.45, b: 0.0, a: 1.0 };
+
 /// Contact forces as arrows in the world frame, one entity [`CONTACTS_ENTITY`] replaced at each
-/// call: an arrow per `(point, force)` (m, N), tail at the point, along the force,
+/// call: an arrow per `(point, force, colour)` (m, N), tail at the point, along the force,
 /// `|f| · metres_per_newton` long; forces below 1e-9 N are left out. The live view and `record`
 /// publish it on `/pivotsim/contact_forces` for every signals frame
-/// ([`super::signals::contact_forces`]).
+/// ([`super::signals::contact_forces`]: sticking points [`STICK_COLOR`], slipping ones
+/// [`SLIP_COLOR`]).
 pub fn force_arrows(
-    forces: impl IntoIterator<Item = ([f64; 3], [f64; 3])>,
+    forces: impl IntoIterator<Item = ([f64; 3], [f64; 3], Color)>,
     metres_per_newton: f64,
     stamp: Timestamp,
 ) -> SceneUpdate {
-    let color = Color { r: 0.9, g: 0.1, b: 0.1, a: 1.0 };
     let arrows = forces
         .into_iter()
-        .filter_map(|(p, f)| {
+        .filter_map(|(p, f, color)| {
             let n = dot(f, f).sqrt();
             (n > 1e-9 && n.is_finite()).then(|| {
                 let len = n * metres_per_newton;
@@ -345,6 +350,7 @@ mod tests {
             name: name.into(),
             kind: msgs::BodyKind::Dynamic,
             mass: 1.0,
+            visuals: Vec::new(),
             colliders: vec![msgs::Collider {
                 shape,
                 position: [0.0, 0.0, 1.0],
@@ -406,15 +412,100 @@ mod tests {
         assert!(e[6].triangles.is_empty());
     }
 
+    /// The tips of a capsule (`msgs` convention: axis z, `half_height` of the straight part) in
+    /// the world, for a body at `pose` (position, quaternion).
+    fn capsule_tips(c: &msgs::Collider, position: [f64; 3], q: [f64; 4]) -> [[f64; 3]; 2] {
+        let msgs::Shape::Capsule { radius, half_height } = c.shape else { panic!("{:?}", c.shape) };
+        [1.0, -1.0].map(|s| {
+            let local = rotate(c.orientation, [0.0, 0.0, s * (half_height + radius)]);
+            let body = [0, 1, 2].map(|i| c.position[i] + local[i]);
+            let w = rotate(q, body);
+            [0, 1, 2].map(|i| position[i] + w[i])
+        })
+    }
+
+    /// Every dynamic body of every shipped scene is drawn: its entity has at least one primitive
+    /// (the crane's and the offshore crane's rope segments through their visual-only capsules).
+    /// And a rope is drawn unbroken: after 2 s of its scene, the nearer tips of two segments joined
+    /// by a ball joint are within 1 cm of each other in the world (from the engine's pose frame).
+    #[test]
+    fn every_dynamic_body_of_every_shipped_scene_is_drawn() {
+        use std::time::{Duration, Instant};
+        for b in pivotsim_server::scene::BUILTIN {
+            let world = msgs::WorldName::new(format!("drawn-{}", b.name)).unwrap();
+            let mut e = pivotsim_server::serve::Engine::new(b.name, world, Duration::from_secs(60)).unwrap();
+            let t0 = Instant::now();
+            for i in 0..120 {
+                assert!(e.tick(t0 + Duration::from_secs_f64(i as f64 / 60.0)), "{}", b.name);
+            }
+            let d = msgs::SceneDescription::decode(e.description()).unwrap();
+            let s = scene_update(&d, Timestamp::new(0, 0));
+            assert_eq!(s.skipped, 0, "{}", b.name);
+            let mut dynamic = 0;
+            for (body, ent) in d.bodies.iter().zip(&s.update.entities) {
+                assert_eq!(body.name, ent.id);
+                if body.kind != msgs::BodyKind::Dynamic {
+                    continue;
+                }
+                dynamic += 1;
+                let primitives = ent.spheres.len()
+                    + ent.cubes.len()
+                    + ent.cylinders.len()
+                    + ent.triangles.len()
+                    + ent.models.len()
+                    + ent.lines.len();
+                assert!(primitives > 0, "{}: body {} is not drawn", b.name, body.name);
+            }
+            assert!(dynamic > 0, "{}", b.name);
+            // Ropes: the segments with visuals, joined by ball joints.
+            let poses = msgs::PoseFrame::decode(e.pose_frame()).unwrap();
+            let pose_of = |id: u32| {
+                let p = poses.bodies.iter().find(|p| p.id == id).unwrap();
+                (p.position, p.orientation)
+            };
+            let mut joined = 0;
+            for j in d.joints.iter().filter(|j| j.kind == msgs::JointKind::Ball) {
+                let Some(parent) = j.parent else { continue };
+                let (Some(a), Some(c)) = (d.body(parent), d.body(j.child)) else { continue };
+                let (Some(va), Some(vc)) = (a.visuals.first(), c.visuals.first()) else { continue };
+                let (pa, qa) = pose_of(a.id);
+                let (pc, qc) = pose_of(c.id);
+                let gap = capsule_tips(va, pa, qa)
+                    .iter()
+                    .flat_map(|x| capsule_tips(vc, pc, qc).map(|y| dot(sub(*x, y), sub(*x, y)).sqrt()))
+                    .fold(f64::INFINITY, f64::min);
+                assert!(gap < 0.01, "{}: joint {} gap {gap} m", b.name, j.name);
+                joined += 1;
+            }
+            // Segment `i` of cable `c` is the body `c/i`: each cable has one pair fewer than segments.
+            let drawn: Vec<&str> =
+                d.bodies.iter().filter(|b| !b.visuals.is_empty()).map(|b| b.name.as_str()).collect();
+            let mut cables: Vec<&str> =
+                drawn.iter().filter_map(|n| n.rsplit_once('/').map(|(c, _)| c)).collect();
+            cables.dedup();
+            let segments = drawn.len();
+            assert_eq!(joined + cables.len(), segments, "{}: every pair of neighbouring segments", b.name);
+            println!(
+                "{}: {dynamic} dynamic bodies drawn, {segments} rope segments, {joined} joints checked",
+                b.name
+            );
+        }
+    }
+
     #[test]
     fn force_arrows_point_along_the_force() {
         let u = force_arrows(
-            [([1.0, 0.0, 0.0], [0.0, 0.0, 100.0]), ([0.0; 3], [-5.0, 0.0, 0.0]), ([0.0; 3], [0.0; 3])],
+            [
+                ([1.0, 0.0, 0.0], [0.0, 0.0, 100.0], STICK_COLOR),
+                ([0.0; 3], [-5.0, 0.0, 0.0], SLIP_COLOR),
+                ([0.0; 3], [0.0; 3], STICK_COLOR),
+            ],
             0.01,
             Timestamp::new(0, 0),
         );
         let a = &u.entities[0].arrows;
         assert_eq!(a.len(), 2, "the zero force is left out");
+        assert_eq!((a[0].color, a[1].color), (Some(STICK_COLOR), Some(SLIP_COLOR)));
         assert!((a[0].shaft_length + a[0].head_length - 1.0).abs() < 1e-12);
         for (arrow, dir) in a.iter().zip([[0.0, 0.0, 1.0], [-1.0, 0.0, 0.0]]) {
             let q = arrow.pose.unwrap().orientation.unwrap();

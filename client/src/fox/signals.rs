@@ -160,8 +160,10 @@ pub fn contacts_json(s: &msgs::SignalsFrame, scene: Option<&msgs::SceneDescripti
 
 /// The contact forces on body B of each contact (`normal_force · normal + friction`, N) as arrows
 /// at the contact points ([`super::scene::force_arrows`]), scaled so that the largest is
-/// [`LONGEST_ARROW`] long; open contacts carry no force and draw nothing.
+/// [`LONGEST_ARROW`] long, coloured by state as the ROS 2 bridge colours them: stick green, slip
+/// orange; open contacts carry no force and draw nothing.
 pub fn contact_forces(s: &msgs::SignalsFrame, stamp: Timestamp) -> SceneUpdate {
+    use super::scene::{SLIP_COLOR, STICK_COLOR};
     let largest = s
         .contacts
         .iter()
@@ -169,7 +171,12 @@ pub fn contact_forces(s: &msgs::SignalsFrame, stamp: Timestamp) -> SceneUpdate {
         .filter(|n| n.is_finite())
         .fold(0.0, f64::max);
     let scale = if largest > 1e-9 { LONGEST_ARROW / largest } else { 0.0 };
-    super::scene::force_arrows(s.contacts.iter().map(|c| (c.point, c.force())), scale, stamp)
+    let arrows = s.contacts.iter().filter_map(|c| match c.state {
+        msgs::ContactCode::Open => None,
+        msgs::ContactCode::Stick => Some((c.point, c.force(), STICK_COLOR)),
+        msgs::ContactCode::Slip => Some((c.point, c.force(), SLIP_COLOR)),
+    });
+    super::scene::force_arrows(arrows, scale, stamp)
 }
 
 /// JSON schema of [`contacts_json`].
@@ -241,6 +248,16 @@ mod tests {
         assert_eq!(arrows.len(), 1);
         let a = &arrows[0];
         assert!((a.shaft_length + a.head_length - LONGEST_ARROW).abs() < 1e-12);
+        // Slipping: orange, as the ROS 2 path's (1, 0.45, 0); sticking: green (0.1, 0.8, 0.1).
+        let slip = a.color.unwrap();
+        assert_eq!((slip.r, slip.g, slip.b, slip.a), (1.0, 0.45, 0.0, 1.0));
+        let mut stuck = s.clone();
+        stuck.contacts[0].state = msgs::ContactCode::Stick;
+        let green = contact_forces(&stuck, Timestamp::new(1, 0)).entities[0].arrows[0].color.unwrap();
+        assert_eq!((green.r, green.g, green.b, green.a), (0.1, 0.8, 0.1, 1.0));
+        let mut open = s.clone();
+        open.contacts[0].state = msgs::ContactCode::Open;
+        assert!(contact_forces(&open, Timestamp::new(1, 0)).entities[0].arrows.is_empty(), "open: no arrow");
         let p = a.pose.as_ref().unwrap().position.as_ref().unwrap();
         assert_eq!((p.x, p.y, p.z), (1.0, 2.0, 0.0));
         // The arrow's +x turned by its orientation is the force's direction.

@@ -208,6 +208,115 @@ mod tests {
         assert_eq!(layout["configById"]["3D!pivotsim"]["followTf"], crate::fox::WORLD_FRAME);
     }
 
+    /// Every channel of the live view and the recording (the inputs of `record` too).
+    fn all_channels() -> Vec<ChannelSpec> {
+        let mut c = vec![
+            tf(),
+            scene(),
+            description(),
+            poses(),
+            stats(),
+            signals(),
+            contacts(),
+            contact_forces(),
+            events(),
+            view_health(),
+        ];
+        c.extend(Topic::INPUTS.iter().map(|t| input(*t)));
+        c
+    }
+
+    /// The shipped live-view layout resolves against what this path publishes: its 3D topics are
+    /// channels of the view, and each Plot path reaches a plottable value in the JSON messages the
+    /// view makes from 2 s of at least one shipped scene (the server's engine, no transport) — the
+    /// stats in every scene, the "contacts slipping" count too (every shipped scene with contacts
+    /// declares a `contacts` sensor, and they have contact records).
+    #[test]
+    fn the_live_layout_resolves_against_what_the_view_publishes() {
+        use pivotsim_tests::layout::{layout_refs, parse, plottable, resolve};
+        use std::time::{Duration, Instant};
+        let layout: serde_json::Value =
+            serde_json::from_str(include_str!("../../../docs/foxglove/pivotsim-layout.json")).unwrap();
+        let refs = layout_refs(&layout);
+        let channels: Vec<String> = all_channels().into_iter().map(|c| c.topic).collect();
+        for t in &refs.topics {
+            assert!(channels.contains(t), "3D topic {t} is no channel of the view");
+        }
+        let mut scenes = Vec::new();
+        for b in pivotsim_server::scene::BUILTIN {
+            let world = pivotsim_msgs::WorldName::new(format!("live-layout-{}", b.name)).unwrap();
+            let mut e = pivotsim_server::serve::Engine::new(b.name, world, Duration::from_secs(60)).unwrap();
+            let t0 = Instant::now();
+            for i in 0..120 {
+                assert!(e.tick(t0 + Duration::from_secs_f64(i as f64 / 60.0)));
+            }
+            let d = pivotsim_msgs::SceneDescription::decode(e.description()).unwrap();
+            let stats = pivotsim_msgs::SolverStats::decode(e.stats_frame()).unwrap();
+            let sig = pivotsim_msgs::SignalsFrame::decode(e.signals_frame()).unwrap();
+            let m: Vec<(&str, serde_json::Value)> = vec![
+                (STATS, tojson::stats_json(&stats)),
+                (SIGNALS, super::super::signals::signals_json(&sig)),
+                (CONTACTS, super::super::signals::contacts_json(&sig, Some(&d))),
+            ];
+            scenes.push((b.name, m, sig.contacts.len()));
+        }
+        for (scene, _, contacts) in &scenes {
+            println!("{scene}: {contacts} contact records");
+            // The pendulum and the hanging chain touch nothing (and declare no `contacts` sensor).
+            assert!(
+                *contacts > 0 || matches!(*scene, "pendulum" | "hanging_chain"),
+                "{scene}: no contact records"
+            );
+        }
+        for (p, _) in &refs.plot_paths {
+            let mp = parse(p).unwrap_or_else(|e| panic!("{e}"));
+            assert!(channels.contains(&mp.topic), "{p}: no channel {}", mp.topic);
+            let every = mp.topic == STATS || mp.topic == CONTACTS;
+            let found: Vec<&str> = scenes
+                .iter()
+                .filter(|(scene, m, _)| {
+                    let ok = m
+                        .iter()
+                        .filter(|(t, _)| *t == mp.topic)
+                        .any(|(_, msg)| resolve(msg, &mp.steps).into_iter().any(plottable));
+                    assert!(ok || !every, "{p}: nothing plottable in {scene}");
+                    ok
+                })
+                .map(|(s, _, _)| *s)
+                .collect();
+            assert!(!found.is_empty(), "{p}: resolves in no shipped scene");
+        }
+        assert!(refs.plot_paths.len() >= 19, "{}", refs.plot_paths.len());
+    }
+
+    /// One topic name never carries two types across the two viewer paths: no topic of the live
+    /// view or the recording is a topic of the ROS 2 bridge, but `/tf` — each path's transform
+    /// tree (`foxglove.FrameTransforms` here, `tf2_msgs/msg/TFMessage` there), which Foxglove's 3D
+    /// panel reads in either form.
+    #[test]
+    fn no_topic_carries_two_types_across_the_live_view_and_the_ros2_bridge() {
+        let ros = pivotsim_ros2_bridge::topics::published();
+        for c in all_channels() {
+            let shared: Vec<&(&str, String)> = ros.iter().filter(|(t, _)| *t == c.topic).collect();
+            if c.topic == TF {
+                assert_eq!(shared.len(), 1);
+                continue;
+            }
+            assert!(
+                shared.is_empty(),
+                "{} is {} here and {:?} on the ROS 2 path",
+                c.topic,
+                c.schema.name,
+                shared
+            );
+            assert!(
+                !c.topic.starts_with(pivotsim_ros2_bridge::topics::WRENCH_PREFIX),
+                "{} is under the ROS 2 path's wrench topics",
+                c.topic
+            );
+        }
+    }
+
     #[test]
     fn well_known_channels_carry_protobuf_schemas() {
         for (spec, name) in [

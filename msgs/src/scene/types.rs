@@ -92,6 +92,18 @@ pub struct BodyInfo {
     pub mass: f64,
     /// Collision shapes in the body frame.
     pub colliders: Vec<Collider>,
+    /// Shapes drawn but not collided, in the body frame: a `[[cable]]`'s segment capsules (its
+    /// segments do not collide). Absent (and not written) when empty. A renderer draws
+    /// [`BodyInfo::shapes`].
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub visuals: Vec<Collider>,
+}
+
+impl BodyInfo {
+    /// Everything to draw: the colliders, then the visual-only shapes.
+    pub fn shapes(&self) -> impl Iterator<Item = &Collider> {
+        self.colliders.iter().chain(&self.visuals)
+    }
 }
 
 /// A shape placed in its body's frame.

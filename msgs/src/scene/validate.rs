@@ -155,11 +155,13 @@ impl SceneDescription {
             if b.mass < 0.0 || (b.kind == BodyKind::Dynamic && b.mass <= 0.0) {
                 return Err(SceneError::NonPositive { path: format!("{p}.mass"), value: b.mass });
             }
-            at_most(|| format!("{p}.colliders"), b.colliders.len(), MAX_COLLIDERS_PER_BODY)?;
-            for (j, c) in b.colliders.iter().enumerate() {
-                let cp = format!("{p}.colliders[{j}]");
-                pose(&cp, &c.position, &c.orientation)?;
-                shape(&format!("{cp}.shape"), &c.shape)?;
+            for (field, list) in [("colliders", &b.colliders), ("visuals", &b.visuals)] {
+                at_most(|| format!("{p}.{field}"), list.len(), MAX_COLLIDERS_PER_BODY)?;
+                for (j, c) in list.iter().enumerate() {
+                    let cp = format!("{p}.{field}[{j}]");
+                    pose(&cp, &c.position, &c.orientation)?;
+                    shape(&format!("{cp}.shape"), &c.shape)?;
+                }
             }
         }
 

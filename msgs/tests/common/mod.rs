@@ -309,6 +309,8 @@ pub fn scene() -> impl Strategy<Value = SceneDescription> {
                     name: format!("{i}-{name}"),
                     kind,
                     mass,
+                    // Odd bodies draw their shapes once more as visuals (a rope segment's).
+                    visuals: if i % 2 == 1 { colliders.clone() } else { Vec::new() },
                     colliders,
                 })
                 .collect();
@@ -429,6 +431,7 @@ pub fn sample_scene() -> SceneDescription {
                 name: "ground".into(),
                 kind: BodyKind::Static,
                 mass: 0.0,
+                visuals: Vec::new(),
                 colliders: vec![Collider {
                     shape: Shape::Box { half_extents: [10.0, 10.0, 0.5] },
                     position: [0.0, 0.0, -0.5],
@@ -440,6 +443,7 @@ pub fn sample_scene() -> SceneDescription {
                 name: "drum".into(),
                 kind: BodyKind::Dynamic,
                 mass: 400.0,
+                visuals: Vec::new(),
                 colliders: vec![Collider {
                     shape: Shape::Cylinder { radius: 0.3, half_height: 0.5 },
                     position: [0.0; 3],

@@ -185,6 +185,9 @@ pub struct Scene {
     pub faults: Faults,
     /// How many of `faults` the file declared (a reset keeps these).
     pub declared_faults: usize,
+    /// Shapes drawn but not collided (a `[[cable]]`'s segment capsules): body, shape, pose in the
+    /// body frame. Display only: the world never sees them.
+    pub visuals: Vec<(crate::dynamics::BodyId, crate::dynamics::Shape, nalgebra::Isometry3<f64>)>,
 }
 
 impl Scene {

@@ -90,7 +90,7 @@ pub fn describe(scene: &Scene, world_name: &str) -> msgs::SceneDescription {
         scene: scene.name.clone(),
         timestep: w.settings().timestep,
         gravity: [g.x, g.y, g.z],
-        bodies: body_infos(w),
+        bodies: scene_bodies(scene),
         joints: joint_infos(w),
         actuators: actuator_infos(scene),
         joystick: joystick_bindings(scene),
@@ -113,11 +113,23 @@ fn body_infos(w: &World) -> Vec<msgs::BodyInfo> {
                 BodyKind::Static => msgs::BodyKind::Static,
             },
             mass: if b.is_dynamic() { b.mass() } else { 0.0 },
+            visuals: Vec::new(),
             colliders: Vec::new(),
         })
         .collect();
     for c in w.colliders() {
         collider(c.shape(), &c.offset(), &mut bodies[c.body().index()].colliders);
+    }
+    bodies
+}
+
+/// [`body_infos`] with the scene's display-only shapes ([`Scene::visuals`]).
+fn scene_bodies(scene: &Scene) -> Vec<msgs::BodyInfo> {
+    let mut bodies = body_infos(&scene.world);
+    for (body, shape, pose) in &scene.visuals {
+        if let Some(b) = bodies.get_mut(body.index()) {
+            collider(shape, pose, &mut b.visuals);
+        }
     }
     bodies
 }

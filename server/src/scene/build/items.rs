@@ -149,7 +149,25 @@ impl Builder<'_> {
             (None, None) => {}
             _ => return Err(self.invalid(span, "drum", "give both `drum` and `drum_radius`")),
         }
-        self.world.add_chain(cb).map_err(|e| self.model(span, &d.name, e))?;
+        let chain = self.world.add_chain(cb).map_err(|e| self.model(span, &d.name, e))?;
+        // The segments' capsules, drawn (they collide with nothing): along each segment's z, as
+        // long as the anchor of its joint to the segment above is from its centre (ℓ/2, or the
+        // lengthened chord's half of a sagging cable).
+        for &body in &chain.bodies {
+            let half = chain
+                .joints
+                .iter()
+                .filter_map(|&j| self.world.joint(j))
+                .find(|j| j.body_a() == body && j.kind() == crate::dynamics::JointKind::Ball)
+                .map_or(ell / 2.0, |j| j.frame_a().translation.vector.norm());
+            let radius = diameter / 2.0;
+            let shape = if half > radius {
+                Shape::Capsule { radius, half_length: half - radius }
+            } else {
+                Shape::Ball { radius }
+            };
+            self.visuals.push((body, shape, Isometry3::identity()));
+        }
         Ok(())
     }
 

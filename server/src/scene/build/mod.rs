@@ -47,6 +47,8 @@ pub(super) struct Builder<'a> {
     default_mu: f64,
     default_compliance: f64,
     body_spans: HashMap<String, Range<usize>>,
+    /// Display-only shapes ([`Scene::visuals`]).
+    visuals: Vec<(BodyId, Shape, Isometry3<f64>)>,
 }
 
 /// A built shape: the shape, its pose in the body frame, its friction and its material name.
@@ -155,6 +157,7 @@ pub(crate) fn build(file: &str, text: &str) -> R<Scene> {
     let mut signals = super::signals::build_signals(&src, &b.world, &parsed.sensor, &parsed.event)?;
     let faults = super::signals::build_faults(&src, &b.world, &controls, &mut signals, &parsed.fault)?;
     let declared_faults = faults.list().len();
+    let visuals = std::mem::take(&mut b.visuals);
     let mut world = b.world;
     let mut controls = controls;
     // The initial actuator values are in force from the first step on.
@@ -176,6 +179,7 @@ pub(crate) fn build(file: &str, text: &str) -> R<Scene> {
         signals,
         faults,
         declared_faults,
+        visuals,
     })
 }
 
@@ -190,6 +194,7 @@ impl<'a> Builder<'a> {
             default_mu: 1.0,
             default_compliance: crate::dynamics::DEFAULT_COMPLIANCE,
             body_spans: HashMap::new(),
+            visuals: Vec::new(),
         }
     }
 }
