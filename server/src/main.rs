@@ -34,9 +34,22 @@ enum Command {
     /// Run a scene headless under its script, as fast as possible, and print a summary.
     Run {
         /// A built-in scene name (see `scenes`) or a scene file path.
-        #[arg(long)]
-        scene: String,
-        /// Simulated seconds, a finite number > 0 up to 1e6 (default: the scene's duration).
+        #[arg(long, required_unless_present = "from", conflicts_with = "from")]
+        scene: Option<String>,
+        /// Go on from this snapshot (`--snapshot`, or the server's `snapshot` request) instead of
+        /// a scene's start: the scene is the one the snapshot carries, the run repeats the
+        /// uninterrupted run bit for bit (README "Rig control").
+        #[arg(long, value_name = "FILE", conflicts_with = "set")]
+        from: Option<PathBuf>,
+        /// Write a snapshot of the complete state when the world reaches this time (s; rounded to
+        /// a step within the run). Needs --snapshot.
+        #[arg(long, value_name = "T", requires = "snapshot", allow_negative_numbers = true)]
+        snapshot_at: Option<f64>,
+        /// The snapshot file --snapshot-at writes.
+        #[arg(long, value_name = "FILE", requires = "snapshot_at")]
+        snapshot: Option<PathBuf>,
+        /// Simulated seconds, a finite number > 0 up to 1e6 (default: the scene's duration; from a
+        /// snapshot, what is left of it).
         #[arg(long, allow_negative_numbers = true, value_parser = values::run_seconds)]
         duration: Option<f64>,
         /// Solver variant for every island (default: the scene's).
@@ -126,6 +139,9 @@ fn main() -> ExitCode {
         Some(Command::Solve(args)) => cli::solve::solve(&args),
         Some(Command::Run {
             scene,
+            from,
+            snapshot_at,
+            snapshot,
             duration,
             variant,
             stats,
@@ -147,8 +163,16 @@ fn main() -> ExitCode {
                 dump_hard: dump_hard as usize,
                 shadow,
                 progress: !json,
+                snapshot: snapshot_at
+                    .zip(snapshot)
+                    .map(|(time, path)| pivotsim_server::run::SnapshotAt { time, path }),
+                watchdog: None,
             };
-            cli::run::run(&scene, &set, &opts, json)
+            match (scene, from) {
+                (_, Some(file)) => cli::run::run(cli::run::Start::Snapshot(file), &set, opts, json),
+                (Some(scene), None) => cli::run::run(cli::run::Start::Scene(scene), &set, opts, json),
+                (None, None) => Err(anyhow::anyhow!("give --scene or --from")),
+            }
         }
         Some(Command::Scenes) => {
             cli::run::scenes();
