@@ -36,7 +36,7 @@ pub use codes::{ActuatorMode, REJECT_REASONS, RejectReason, SolveStatus, SolverV
 pub use control::{
     ControlCommand, ControlError, ControlErrorCode, ControlFailure, ControlOutcome, ControlReply,
     ControlRequest, FaultKind, MAX_FAULT_TARGET_LEN, MAX_MESSAGE_LEN, MAX_SCENE_REF_LEN, MAX_STEP_COUNT,
-    ServerStatus,
+    ServerStatus, StepReport,
 };
 pub use header::{DecodeError, FORMAT_VERSION, FrameError, HEADER_LEN, Header, Kind, MAGIC, MAX_FRAME_LEN};
 pub use input::{

@@ -395,6 +395,7 @@ fn control_errors() {
         sequence: 0,
         sim_time: f64::NAN,
         variant: SolverVariant::Pgs,
+        steps: None,
     };
     assert!(matches!(ControlReply::ok(1, nan).encode(&mut Vec::new()), Err(ControlError::SimTime { .. })));
 }
