@@ -292,7 +292,9 @@ pub enum ControlError {
         len: usize,
     },
     /// A snapshot file name that is empty, too long, absolute, has a control character or `..`.
-    #[error("snapshot path of {len} bytes (1 ..= {MAX_SCENE_REF_LEN}, relative, no control characters, no `..`)")]
+    #[error(
+        "snapshot path of {len} bytes (1 ..= {MAX_SCENE_REF_LEN}, relative, no control characters, no `..`)"
+    )]
     SnapshotPath {
         /// Length in bytes.
         len: usize,

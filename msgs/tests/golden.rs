@@ -274,7 +274,8 @@ fn readme_reply_examples_answer_their_requests() {
                     assert_eq!(status.variant, variant, "{line}");
                 }
                 // Lockstep replies say how many steps they took; no other reply does.
-                let lockstep = matches!(req.command, ControlCommand::Step { .. } | ControlCommand::RunUntil { .. });
+                let lockstep =
+                    matches!(req.command, ControlCommand::Step { .. } | ControlCommand::RunUntil { .. });
                 assert_eq!(status.steps.is_some(), lockstep, "{line}");
             }
             ControlOutcome::Error(f) => {

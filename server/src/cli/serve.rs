@@ -79,6 +79,10 @@ pub struct ServeArgs {
     /// Largest scene file `load_scene` or `reset` reads, in bytes (at least 1).
     #[arg(long, default_value_t = pivotsim_server::serve::loader::DEFAULT_MAX_SCENE_BYTES, value_parser = clap::value_parser!(u64).range(1..))]
     pub max_scene_bytes: u64,
+    /// The directory where the `snapshot` control request writes and `restore` reads (files named
+    /// relative to it; no `..`, no absolute paths). Default: none, so both are refused.
+    #[arg(long, value_name = "DIR")]
+    pub snapshot_dir: Option<PathBuf>,
 }
 
 impl ServeArgs {
@@ -108,6 +112,7 @@ impl ServeArgs {
             max_solve_us: self.max_solve_us,
             scene_dirs: self.scene_dirs,
             max_scene_bytes: self.max_scene_bytes,
+            snapshot_dir: self.snapshot_dir,
             slow_load: None,
         }
     }

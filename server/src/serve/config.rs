@@ -72,6 +72,9 @@ pub struct ServeConfig {
     pub max_scene_bytes: u64,
     /// Test hook: every scene load waits this long before it reads (slow storage).
     pub slow_load: Option<Duration>,
+    /// Where the `snapshot` control request writes and `restore` reads (`--snapshot-dir`; `None`:
+    /// both are refused).
+    pub snapshot_dir: Option<PathBuf>,
 }
 
 impl Default for ServeConfig {
@@ -91,6 +94,7 @@ impl Default for ServeConfig {
             scene_dirs: Vec::new(),
             max_scene_bytes: super::loader::DEFAULT_MAX_SCENE_BYTES,
             slow_load: None,
+            snapshot_dir: None,
         }
     }
 }

@@ -27,6 +27,7 @@
 //! sequence always means a repeat of the same state.
 
 use std::collections::HashMap;
+use std::path::PathBuf;
 use std::time::{Duration, Instant};
 
 use pivotsim_msgs as msgs;
@@ -38,6 +39,7 @@ use super::describe::{actuator_mode, describe};
 use super::loader::{LoadError, LoadJob, LoadPolicy, Loaded};
 use crate::dynamics::{BodyKind, Watchdog};
 use crate::scene::{self, ActuatorKind, Scene, SceneError};
+use crate::snapshot::Snapshot;
 use crate::solver::Variant;
 
 /// What a control request or a transport needs from the engine's status.
@@ -72,8 +74,6 @@ pub struct Engine {
     events_buf: Vec<u8>,
     /// The sequence whose events were encoded last.
     events_sequence: Option<u64>,
-    /// Events of the steps of one `step N` request before its last (published with the last's).
-    earlier_events: Vec<msgs::EventRecord>,
     step_wall_us: f64,
     failure: Option<String>,
     generation: u64,
@@ -88,6 +88,8 @@ pub struct Engine {
     max_solve_us: Option<f64>,
     /// What `load_scene` and `reset` may read.
     policy: Arc<LoadPolicy>,
+    /// Where `snapshot` writes and `restore` reads (`serve --snapshot-dir`; none: both refused).
+    snapshot_dir: Option<PathBuf>,
 }
 
 /// What a control request asks of the loop ([`Engine::begin_control`]).
@@ -97,6 +99,18 @@ pub enum ControlStep {
     Reply(Vec<u8>),
     /// A scene to load (`load_scene`, `reset`): run it, then [`Engine::finish_load`].
     Load(LoadJob),
+    /// A lockstep request (`step`, `run_until`): [`Engine::lockstep_step`] until it returns
+    /// `false`, publishing each step's frames, then [`Engine::finish_steps`].
+    Steps(StepJob),
+}
+
+/// A lockstep request under way: the steps left and what the steps taken gave.
+#[derive(Debug, Clone, PartialEq)]
+pub struct StepJob {
+    /// The request's id.
+    pub id: u64,
+    remaining: u32,
+    report: msgs::StepReport,
 }
 
 impl Engine {
@@ -148,7 +162,6 @@ impl Engine {
             events: msgs::EventsFrame::default(),
             events_buf: Vec::new(),
             events_sequence: None,
-            earlier_events: Vec::new(),
             step_wall_us: 0.0,
             failure: None,
             generation: 0,
@@ -159,6 +172,7 @@ impl Engine {
             start_scene: String::new(),
             max_solve_us: None,
             policy: Arc::new(LoadPolicy::default()),
+            snapshot_dir: None,
         };
         e.overrides = overrides.to_vec();
         e.start_scene = scene_ref.to_string();
@@ -173,6 +187,62 @@ impl Engine {
     pub fn set_load_policy(&mut self, mut policy: LoadPolicy) {
         policy.trust_start_scene(&self.start_scene);
         self.policy = Arc::new(policy);
+    }
+
+    /// Sets where `snapshot` writes and `restore` reads (`None`: both are refused).
+    pub fn set_snapshot_dir(&mut self, dir: Option<PathBuf>) {
+        self.snapshot_dir = dir;
+    }
+
+    /// The file a `snapshot` or `restore` request names, inside the snapshot directory (the wire
+    /// rules already refused absolute paths and `..`).
+    fn snapshot_path(&self, path: &str) -> Result<PathBuf, (msgs::ControlErrorCode, String)> {
+        match &self.snapshot_dir {
+            Some(dir) => Ok(dir.join(path)),
+            None => Err((
+                msgs::ControlErrorCode::LoadRefused,
+                "this server keeps no snapshots (serve --snapshot-dir)".into(),
+            )),
+        }
+    }
+
+    /// `snapshot`: the complete state, with the watchdog's ledger, to a file.
+    fn write_snapshot(&self, path: &str) -> Result<(), (msgs::ControlErrorCode, String)> {
+        let file = self.snapshot_path(path)?;
+        let failed = |e: &dyn std::fmt::Display| {
+            (msgs::ControlErrorCode::SnapshotFailed, format!("snapshot `{path}`: {e}"))
+        };
+        if let Some(parent) = file.parent() {
+            std::fs::create_dir_all(parent).map_err(|e| failed(&e))?;
+        }
+        let snap = Snapshot::capture(&self.scene, Some(&self.watchdog)).map_err(|e| failed(&e))?;
+        snap.write(&file).map_err(|e| failed(&e))?;
+        info!("snapshot of `{}` at {:.3} s written to {}", self.scene.name, snap.time(), file.display());
+        Ok(())
+    }
+
+    /// `restore`: a snapshot of the running scene put back, paused, with a new sequence; the
+    /// script drives again until the next input (as after a load).
+    fn restore_snapshot(&mut self, path: &str) -> Result<(), (msgs::ControlErrorCode, String)> {
+        let file = self.snapshot_path(path)?;
+        let failed = |e: &dyn std::fmt::Display| {
+            (msgs::ControlErrorCode::SnapshotFailed, format!("restore `{path}`: {e}"))
+        };
+        let snap = Snapshot::read(&file).map_err(|e| failed(&e))?;
+        snap.restore_into(&mut self.scene).map_err(|e| failed(&e))?;
+        self.watchdog =
+            snap.watchdog.clone().unwrap_or_else(|| Watchdog::new(&self.scene.world, self.scene.watchdog));
+        self.paused = true;
+        self.manual = false;
+        self.last_input = None;
+        self.health.deadman_active = false;
+        self.failure = None;
+        self.unstable = false;
+        self.events_sequence = None;
+        self.sequence += 1;
+        self.encode_frames(pivotsim_link::wall_ns());
+        info!("`{}` restored to {:.3} s from {}", self.scene.name, snap.time(), file.display());
+        Ok(())
     }
 
     fn scene_changed(&mut self) {
@@ -290,6 +360,7 @@ impl Engine {
             sequence: self.sequence,
             sim_time: self.scene.world.time(),
             variant: self.scene.world.settings().solver.variant.into(),
+            steps: None,
         }
     }
 
@@ -407,12 +478,81 @@ impl Engine {
     }
 
     /// Decodes a control request, carries it out and returns the encoded reply; a `load_scene` or
-    /// `reset` is read and built on the calling thread ([`Engine::begin_control`] splits it).
+    /// `reset` is read and built on the calling thread, a lockstep request's steps are taken in
+    /// turn ([`Engine::begin_control`] splits them; only the last step's frames are then left to
+    /// read).
     pub fn handle_control(&mut self, bytes: &[u8]) -> Vec<u8> {
         match self.begin_control(bytes) {
             ControlStep::Reply(r) => r,
             ControlStep::Load(job) => self.finish_load(job.run()),
+            ControlStep::Steps(mut job) => {
+                while self.lockstep_step(&mut job) {}
+                self.finish_steps(&job)
+            }
         }
+    }
+
+    /// The steps of a `step` request, or why not now.
+    fn steps_for(&self, count: u32) -> Result<u32, (msgs::ControlErrorCode, String)> {
+        match self.paused {
+            true => Ok(count),
+            false => Err((msgs::ControlErrorCode::Busy, "`step` needs a paused world (pause first)".into())),
+        }
+    }
+
+    /// The steps of a `run_until` request: to the step nearest `sim_time`, which must be ahead of
+    /// the world's and at most [`msgs::MAX_STEP_COUNT`] steps away.
+    fn steps_until(&self, sim_time: f64) -> Result<u32, (msgs::ControlErrorCode, String)> {
+        use msgs::ControlErrorCode as E;
+        if !self.paused {
+            return Err((E::Busy, "`run_until` needs a paused world (pause first)".into()));
+        }
+        let w = &self.scene.world;
+        let target = (sim_time / w.settings().timestep).round();
+        let now = w.steps() as f64;
+        if target <= now {
+            return Err((E::InThePast, format!("run_until {sim_time} s: the world is at {} s", w.time())));
+        }
+        let n = target - now;
+        if n > f64::from(msgs::MAX_STEP_COUNT) {
+            let msg = format!("run_until {sim_time} s is {n} steps ahead (at most {})", msgs::MAX_STEP_COUNT);
+            return Err((E::InvalidRequest, msg));
+        }
+        Ok(n as u32)
+    }
+
+    /// One step of a lockstep request, its frames encoded (for the caller to publish); `false`
+    /// when the request is done (its last step taken, or a step failed: the world is then paused
+    /// at its last good state).
+    pub fn lockstep_step(&mut self, job: &mut StepJob) -> bool {
+        if job.remaining == 0 {
+            return false;
+        }
+        let ok = self.step_once();
+        self.encode_frames(pivotsim_link::wall_ns());
+        if !ok {
+            job.remaining = 0;
+            return false;
+        }
+        job.remaining -= 1;
+        let r = &mut job.report;
+        r.count += 1;
+        for s in self.scene.world.island_stats() {
+            r.island_solves = r.island_solves.saturating_add(1);
+            if s.status != crate::solver::SolveStatus::Converged {
+                r.not_converged = r.not_converged.saturating_add(1);
+            }
+            if s.residual_rel.is_finite() {
+                r.max_residual_rel = r.max_residual_rel.max(s.residual_rel);
+            }
+        }
+        job.remaining > 0
+    }
+
+    /// The encoded reply to a finished lockstep request.
+    pub fn finish_steps(&self, job: &StepJob) -> Vec<u8> {
+        let status = msgs::ServerStatus { steps: Some(job.report), ..self.status() };
+        encode_reply(&msgs::ControlReply::ok(job.id, status))
     }
 
     /// Decodes a control request and carries it out, except a `load_scene` or `reset`, whose
@@ -437,9 +577,21 @@ impl Engine {
                         overrides,
                     ));
                 }
-                match self.control(&req.command) {
-                    Ok(()) => msgs::ControlReply::ok(req.id, self.status()),
-                    Err((code, msg)) => msgs::ControlReply::error(req.id, code, msg),
+                let lockstep = match req.command {
+                    msgs::ControlCommand::Step { count } => Some(self.steps_for(count)),
+                    msgs::ControlCommand::RunUntil { sim_time } => Some(self.steps_until(sim_time)),
+                    _ => None,
+                };
+                match lockstep {
+                    Some(Ok(count)) => {
+                        let report = msgs::StepReport::default();
+                        return ControlStep::Steps(StepJob { id: req.id, remaining: count, report });
+                    }
+                    Some(Err((code, msg))) => msgs::ControlReply::error(req.id, code, msg),
+                    None => match self.control(&req.command) {
+                        Ok(()) => msgs::ControlReply::ok(req.id, self.status()),
+                        Err((code, msg)) => msgs::ControlReply::error(req.id, code, msg),
+                    },
                 }
             }
         };
@@ -471,27 +623,12 @@ impl Engine {
                 self.paused = false;
                 self.failure = None;
             }
-            C::Step { count } => {
-                if !self.paused {
-                    return Err((E::Busy, "`step` needs a paused world".into()));
-                }
-                // One set of frames for the request, after its last step: the events of the steps
-                // before it travel with that step's (each record has its own time).
-                self.earlier_events.clear();
-                for k in 0..*count {
-                    if !self.step_once() {
-                        break;
-                    }
-                    if k + 1 < *count {
-                        super::wire::push_events(&self.scene.signals, &mut self.earlier_events);
-                    }
-                }
-                self.encode_frames(pivotsim_link::wall_ns());
+            // Loads and lockstep requests go through `begin_control`'s jobs.
+            C::Reset | C::LoadScene { .. } | C::Step { .. } | C::RunUntil { .. } => {
+                return Err((E::Internal, "not a direct control request".into()));
             }
-            // Loads go through `begin_control`'s jobs.
-            C::Reset | C::LoadScene { .. } => {
-                return Err((E::Internal, "a load is not a direct control request".into()));
-            }
+            C::Snapshot { path } => self.write_snapshot(path)?,
+            C::Restore { path } => self.restore_snapshot(path)?,
             C::SetVariant { variant } => {
                 let v = Variant::from(*variant);
                 let mut s = *self.scene.world.settings();
@@ -636,11 +773,9 @@ impl Engine {
         }
         self.events_buf.clear();
         let fresh = self.events_sequence != Some(self.sequence);
-        if fresh && (!sig.events().is_empty() || !self.earlier_events.is_empty()) {
+        if fresh && !sig.events().is_empty() {
             self.events_sequence = Some(self.sequence);
-            // The earlier steps' of a `step N` request first, within the frame's bound.
-            let earlier = &mut self.earlier_events;
-            super::wire::fill_events(sig, self.sequence, w.time(), earlier, &mut self.events);
+            super::wire::fill_events(sig, self.sequence, w.time(), &mut self.events);
             if let Err(e) = self.events.encode(&mut self.events_buf) {
                 warn!("events frame not encodable: {e}");
             }

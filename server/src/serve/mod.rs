@@ -22,6 +22,9 @@
 //! subscriber's buffer is full; a publisher error is logged (rate-limited) and the next step tries
 //! again. While paused the loop keeps publishing the last state's poses, stats and signals (same
 //! sequence, fresh wall time and input counters) at the step rate; an events frame goes out once.
+//! A lockstep request (`step`, `run_until`) is taken one step per turn of the loop, without
+//! pacing: each step's frames are published before the next step, inputs that arrived meanwhile
+//! apply from the next step, and the reply goes out after the last step's frames.
 //! A `load_scene` or `reset` goes to the loader thread (`loader.rs`); the loop keeps stepping and
 //! swaps the built scene in between two steps, then replies. Sequence numbers never restart: the
 //! new scene's first frames carry the next one (the simulation time restarts at 0). Pacing is in
@@ -115,6 +118,7 @@ pub fn run_with(
         config.max_solve_us,
     )?;
     engine.set_load_policy(policy);
+    engine.set_snapshot_dir(config.snapshot_dir.clone());
     engine.set_paused(config.start_paused);
     let mut loader = loader::Loader::spawn()
         .map_err(|e| ServeError::Option(format!("cannot start the scene loader thread: {e}")))?;
@@ -186,6 +190,7 @@ fn serve_loop(
     let mut counted_drops = 0u64;
     let mut next = Instant::now();
     let mut status = StatusWindow::new(engine);
+    let mut lockstep: Option<Lockstep> = None;
     // The start state's frames, stamped now (the engine built them before any clock mattered).
     engine.encode_frames(pivotsim_link::wall_ns());
     for t in transports.iter_mut() {
@@ -196,7 +201,7 @@ fn serve_loop(
         for t in transports.iter_mut() {
             t.poll(tx);
         }
-        let (mut described, mut republish) = drain_inbox(engine, loader, rx);
+        let (mut described, mut republish) = drain_inbox(engine, loader, rx, &mut lockstep);
         // A scene built off this thread swaps in here, between two steps.
         if let Some(pending) = loader.finished() {
             let (loaded, reply) = pending;
@@ -217,6 +222,24 @@ fn serve_loop(
             for t in transports.iter_mut() {
                 t.set_description(engine.description());
             }
+        }
+        // A lockstep request takes its next step now (the world is paused meanwhile).
+        if let Some((mut job, reply)) = lockstep.take() {
+            let more = engine.lockstep_step(&mut job);
+            for t in transports.iter_mut() {
+                t.publish(engine.frames());
+            }
+            steps += 1;
+            status.record_step(engine);
+            match more {
+                true => lockstep = Some((job, reply)),
+                false => reply(engine.finish_steps(&job)),
+            }
+            if config.max_steps.is_some_and(|m| steps >= m) {
+                break;
+            }
+            next = Instant::now();
+            continue;
         }
         let stepped = engine.tick(Instant::now());
         // Paused, the last state is published at the step rate (same sequence), so that consoles
@@ -261,13 +284,17 @@ fn serve_loop(
     }
 }
 
+/// A lockstep request under way and where its reply goes.
+type Lockstep = (engine::StepJob, Box<dyn FnOnce(Vec<u8>) + Send>);
+
 /// Hands every waiting input and control request to the engine (a scene load to the loader
-/// thread, or `busy` while one is under way); returns whether a request changed the scene
-/// description and whether one changed what the frames show.
+/// thread, a lockstep request to `lockstep`, or `busy` while one of either is under way); returns
+/// whether a request changed the scene description and whether one changed what the frames show.
 fn drain_inbox(
     engine: &mut Engine,
     loader: &mut loader::Loader,
     rx: &pivotsim_link::Inbox<Inbound>,
+    lockstep: &mut Option<Lockstep>,
 ) -> (bool, bool) {
     let mut described = false;
     let mut republish = false;
@@ -280,6 +307,12 @@ fn drain_inbox(
                 let (generation, seq) = (engine.generation(), engine.sequence());
                 match engine.begin_control(&bytes) {
                     engine::ControlStep::Reply(r) => reply(r),
+                    engine::ControlStep::Steps(job) if lockstep.is_some() => reply(Engine::error_reply(
+                        job.id,
+                        msgs::ControlErrorCode::Busy,
+                        "another lockstep request is under way",
+                    )),
+                    engine::ControlStep::Steps(job) => *lockstep = Some((job, reply)),
                     engine::ControlStep::Load(job) => {
                         if let Err((job, reply)) = loader.submit(job, reply) {
                             reply(Engine::error_reply(
