@@ -118,6 +118,14 @@ enum Command {
         /// rotation, cold and warm; `sweep.json` in the output directory).
         #[arg(long, value_parser = clap::value_parser!(u32).range(1..=1_000_000))]
         sweep: Option<u32>,
+        /// Run only the hardest-solves stage: each shipped scene's 7 hardest warm solves (dumped
+        /// by a run as shipped, or read from `--data DIR/<scene>/`), timed with every exact variant
+        /// beside ODE's column of issue 31 (`hard.md`, `hard.json`, `hard.svg`).
+        #[arg(long, conflicts_with = "sweep")]
+        hard: bool,
+        /// With --hard: solves per file and variant, the median taken (1 to 1,000).
+        #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u32).range(1..=1_000))]
+        repeats: u32,
     },
     /// The speed/accuracy report: every paper scene with every variant, the paper's Tables 2–4 and
     /// Fig. 3, 5/6, 7 beside its numbers, residual against time for PGS and block pivoting, warm
@@ -179,10 +187,13 @@ fn main() -> ExitCode {
             Ok(())
         }
         Some(Command::Pattern { file, out, ordering }) => cli::pattern::pattern(&file, &out, ordering),
-        Some(Command::BenchSolver { out, quick, data, sweep }) => {
+        Some(Command::BenchSolver { out, quick, data, sweep, hard, repeats }) => {
             let cfg = cli::bench::BenchConfig::new(out, quick, data);
             match sweep {
                 Some(n) => cli::bench::sweep::run(n as usize, &cfg.out).map(|_| ()),
+                None if hard => {
+                    cli::bench::hard::run(&cfg.out, cfg.data.as_deref(), repeats as usize).map(|_| ())
+                }
                 None => cli::bench::run(&cfg).map(|_| ()),
             }
         }
