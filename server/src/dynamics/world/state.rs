@@ -15,12 +15,16 @@
 //!   each query with the manifold's last normal;
 //! - the last step's joint rows (their Jacobians at that step's poses): the joint wrenches the
 //!   signals report between steps are summed from them and their impulses;
+//! - each island solver's cost memory (`Solver::cost_memory`: recent GMRES iterations per coupled
+//!   point and share of rejected direct points, which pick the method of the next coupled point),
+//!   by island slot, of the step's solvers and the projection's;
 //! - the work done by inputs (the watchdog's ledger) and the count of stiffness re-solves.
 //!
 //! What is not, because it cannot change a result: the islands, the assembled problems and every
 //! solver buffer (rebuilt each step from the rows); the solvers' ordering caches (an ordering is a
 //! function of the sparsity pattern, computed again on the first solve after a restore — the only
-//! trace is that solve's `pattern_reused = false`); the broad phase's sort order (its pairs come
+//! trace is that solve's `pattern_reused = false`); the shadow solvers (their answers are
+//! discarded); the broad phase's sort order (its pairs come
 //! out sorted whatever order it kept).
 
 use nalgebra::{Quaternion, UnitQuaternion, Vector3};
@@ -32,7 +36,7 @@ use crate::dynamics::contact::{NarrowPhase, NarrowState};
 use crate::dynamics::joint::JOINT_SLOTS;
 use crate::dynamics::motor::JointMotor;
 use crate::dynamics::rows::{ConstraintRow, RowKey, WarmRow};
-use crate::solver::Variant;
+use crate::solver::{Solver, SolverOptions, Variant};
 
 /// A body's pose and velocities: position, orientation `(i, j, k, w)`, linear and angular
 /// velocity (world frame).
@@ -75,6 +79,9 @@ pub struct WorldState {
     pub(crate) narrow: NarrowState,
     /// The last step's joint rows.
     pub(crate) joint_rows: Vec<ConstraintRow>,
+    /// Cost memory of the island solvers and of the projection's, by island slot.
+    pub(crate) solver_memory: Vec<(f64, f64)>,
+    pub(crate) projection_memory: Vec<(f64, f64)>,
     pub(crate) input_work: f64,
     pub(crate) gs_resolves: u64,
 }
@@ -166,6 +173,8 @@ impl World {
                 .filter(|r| matches!(r.key, RowKey::Joint { .. }))
                 .copied()
                 .collect(),
+            solver_memory: self.ws.solvers.iter().map(Solver::cost_memory).collect(),
+            projection_memory: self.ws.proj_solvers.iter().map(Solver::cost_memory).collect(),
             input_work: self.ws.input_work,
             gs_resolves: self.ws.gs_resolves,
         })
@@ -205,6 +214,8 @@ impl World {
         ws.rows.clone_from(&state.joint_rows);
         ws.input_work = state.input_work;
         ws.gs_resolves = state.gs_resolves;
+        restore_memory(&mut ws.solvers, &state.solver_memory, settings.solver);
+        restore_memory(&mut ws.proj_solvers, &state.projection_memory, settings.solver);
         self.contacts.phase.restore(&state.narrow);
         Ok(())
     }
@@ -236,6 +247,15 @@ impl World {
         let invalid = |what, index| Err(WorldStateError::Invalid { what, index });
         if !(s.time.is_finite() && s.input_work.is_finite()) {
             return invalid("time or input work", 0);
+        }
+        // One solver per island slot: never more islands than bodies.
+        for (what, memory) in [("solver memory", &s.solver_memory), ("projection memory", &s.projection_memory)] {
+            if memory.len() > self.bodies.len().max(1) {
+                return Err(WorldStateError::Count { what, expected: self.bodies.len(), found: memory.len() });
+            }
+            if let Some(i) = memory.iter().position(|&(a, b)| !(a.is_finite() && b.is_finite())) {
+                return invalid(what, i);
+            }
         }
         for (i, b) in s.bodies.iter().enumerate() {
             if !(finite(&b.position) && finite(&b.linvel) && finite(&b.angvel)) {
@@ -271,6 +291,20 @@ fn row_key_order(k: &RowKey) -> (u8, [u32; 5]) {
         RowKey::Force(f) => (2, [f.0, 0, 0, 0, 0]),
         RowKey::Contact { colliders, features, row } => {
             (3, [colliders[0], colliders[1], features[0], features[1], row as u32])
+        }
+    }
+}
+
+/// Sets each island slot's solver memory; slots the state has not seen forget theirs (a new
+/// solver would have none), and missing slots get a new solver so that the memory has a home.
+fn restore_memory(solvers: &mut Vec<Solver>, memory: &[(f64, f64)], options: SolverOptions) {
+    while solvers.len() < memory.len() {
+        solvers.push(Solver::new(options));
+    }
+    for (i, s) in solvers.iter_mut().enumerate() {
+        match memory.get(i) {
+            Some(&m) => s.set_cost_memory(m),
+            None => s.forget_history(),
         }
     }
 }
