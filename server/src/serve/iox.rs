@@ -176,6 +176,10 @@ impl Transport for IoxTransport {
         }
     }
 
+    fn polled(&self) -> bool {
+        true
+    }
+
     fn status(&mut self) -> String {
         format!("iceoryx2: {} subscriber(s)", self.poses_service.dynamic_config().number_of_subscribers())
     }

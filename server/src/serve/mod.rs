@@ -47,7 +47,7 @@ pub mod zenoh_refused;
 
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
-use std::time::Instant;
+use std::time::{Duration, Instant};
 
 use pivotsim_msgs as msgs;
 use tracing::info;
@@ -191,6 +191,7 @@ fn serve_loop(
     let mut next = Instant::now();
     let mut status = StatusWindow::new(engine);
     let mut lockstep: Option<Lockstep> = None;
+    let mut last_request = start;
     // The start state's frames, stamped now (the engine built them before any clock mattered).
     engine.encode_frames(pivotsim_link::wall_ns());
     for t in transports.iter_mut() {
@@ -238,13 +239,17 @@ fn serve_loop(
             if config.max_steps.is_some_and(|m| steps >= m) {
                 break;
             }
-            next = Instant::now();
+            // The state was just published: the next re-send, if the world stays paused, is a
+            // period away.
+            next = Instant::now() + paused_period(engine);
+            last_request = Instant::now();
             continue;
         }
         let stepped = engine.tick(Instant::now());
         // Paused, the last state is published at the step rate (same sequence), so that consoles
         // keep seeing the world and the input counters.
-        if stepped || republish || engine.is_paused() {
+        let resend = engine.is_paused() && Instant::now() >= next;
+        if stepped || republish || resend {
             if !stepped {
                 engine.encode_frames(pivotsim_link::wall_ns());
             }
@@ -261,15 +266,23 @@ fn serve_loop(
         if config.max_steps.is_some_and(|m| steps >= m) {
             break;
         }
-        // As fast as possible steps without waiting; a paused world is still re-sent at the step
-        // rate (real time), never in a busy loop.
-        let rtf = match config.realtime_factor {
-            Some(rtf) => rtf,
-            None if engine.is_paused() => 1.0,
-            None => {
-                next = Instant::now();
-                continue;
+        // Paused: re-sent at the step rate (real time), and any request wakes the loop at once
+        // (a lockstep controller's round trip never waits for the re-send period).
+        if engine.is_paused() {
+            if resend {
+                next = Instant::now() + paused_period(engine);
             }
+            let polled = transports.iter().any(|t| t.polled());
+            wait_paused(next, last_request, polled, transports, tx, rx, shutdown);
+            if rx.wait(Duration::ZERO) {
+                last_request = Instant::now();
+            }
+            continue;
+        }
+        // As fast as possible steps without waiting.
+        let Some(rtf) = config.realtime_factor else {
+            next = Instant::now();
+            continue;
         };
         if pace(&mut next, rtf, stepped, engine, shutdown) {
             overruns += 1;
@@ -281,6 +294,54 @@ fn serve_loop(
         wall_s: start.elapsed().as_secs_f64(),
         sim_time: engine.scene().world.time(),
         inputs: *engine.health(),
+    }
+}
+
+/// How long after the last request a paused loop with a polled transport (iceoryx2) keeps polling
+/// at [`FAST_POLL`] before falling back to [`SLOW_POLL`].
+pub const ACTIVE_WINDOW: Duration = Duration::from_millis(100);
+/// The poll interval while a controller is active (a same-host lockstep round trip waits half of
+/// it on average).
+pub const FAST_POLL: Duration = Duration::from_micros(50);
+/// The poll interval of a quiet paused loop.
+pub const SLOW_POLL: Duration = Duration::from_millis(2);
+
+/// The re-send period of a paused world: the step period in real time.
+fn paused_period(engine: &Engine) -> Duration {
+    step_period(engine.scene().world.settings().timestep, 1.0).unwrap_or(config::MAX_STEP_PERIOD)
+}
+
+/// A paused loop's wait: until `deadline` (the next re-send) or an item in the inbox, whichever
+/// comes first. Transports that push (Zenoh) wake it through the inbox; polled ones (iceoryx2)
+/// are polled every [`FAST_POLL`] within [`ACTIVE_WINDOW`] of the last request, else every
+/// [`SLOW_POLL`].
+fn wait_paused(
+    deadline: Instant,
+    last_request: Instant,
+    polled: bool,
+    transports: &mut [Box<dyn Transport>],
+    tx: &InboxSender,
+    rx: &pivotsim_link::Inbox<Inbound>,
+    shutdown: &AtomicBool,
+) {
+    // Bounded: a period is at most MAX_STEP_PERIOD, and every slice waits at least FAST_POLL.
+    let max_slices = config::MAX_STEP_PERIOD.as_micros() / FAST_POLL.as_micros() + 1;
+    for _ in 0..max_slices {
+        let now = Instant::now();
+        if now >= deadline || shutdown.load(Ordering::Relaxed) {
+            return;
+        }
+        let mut slice = (deadline - now).min(pacing::MAX_SLEEP);
+        if polled {
+            for t in transports.iter_mut() {
+                t.poll(tx);
+            }
+            let poll = if now < last_request + ACTIVE_WINDOW { FAST_POLL } else { SLOW_POLL };
+            slice = slice.min(poll);
+        }
+        if rx.wait(slice) {
+            return;
+        }
     }
 }
 

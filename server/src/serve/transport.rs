@@ -84,6 +84,11 @@ pub trait Transport {
     fn publish(&mut self, frames: Frames<'_>);
     /// Hands over inputs received since the last call (transports that poll).
     fn poll(&mut self, _inbox: &InboxSender) {}
+    /// Whether inputs reach the loop only through [`Transport::poll`] (nothing wakes the loop
+    /// for them): a paused loop then polls at short intervals while a controller is active.
+    fn polled(&self) -> bool {
+        false
+    }
     /// Inputs refused before they reached the loop since the last call (Zenoh's access control);
     /// the loop counts them as `other`. Reading it allocates nothing.
     fn take_refused(&mut self) -> u64 {

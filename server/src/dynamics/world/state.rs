@@ -249,9 +249,15 @@ impl World {
             return invalid("time or input work", 0);
         }
         // One solver per island slot: never more islands than bodies.
-        for (what, memory) in [("solver memory", &s.solver_memory), ("projection memory", &s.projection_memory)] {
+        for (what, memory) in
+            [("solver memory", &s.solver_memory), ("projection memory", &s.projection_memory)]
+        {
             if memory.len() > self.bodies.len().max(1) {
-                return Err(WorldStateError::Count { what, expected: self.bodies.len(), found: memory.len() });
+                return Err(WorldStateError::Count {
+                    what,
+                    expected: self.bodies.len(),
+                    found: memory.len(),
+                });
             }
             if let Some(i) = memory.iter().position(|&(a, b)| !(a.is_finite() && b.is_finite())) {
                 return invalid(what, i);
