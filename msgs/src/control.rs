@@ -98,6 +98,8 @@ pub enum ControlCommand {
         /// File name relative to the server's snapshot directory.
         path: String,
     },
+    /// Publish a keyframe of the current state on `keyframes` (a recorder that starts asks so).
+    Keyframe,
     /// Inject a fault (an instructor station): reported as an event of the next step.
     Fault {
         /// What breaks.
@@ -419,6 +421,7 @@ mod raw {
         Restore {
             path: String,
         },
+        Keyframe {},
         Fault {
             fault: String,
             target: String,
@@ -529,6 +532,7 @@ impl ControlRequest {
             raw::Command::RunUntil { sim_time } => ControlCommand::RunUntil { sim_time },
             raw::Command::Snapshot { path } => ControlCommand::Snapshot { path },
             raw::Command::Restore { path } => ControlCommand::Restore { path },
+            raw::Command::Keyframe {} => ControlCommand::Keyframe,
             raw::Command::Fault { fault, target, tension, to, ramp } => ControlCommand::Fault {
                 fault: FaultKind::from_name(&fault)
                     .ok_or(DecodeError::Invalid(ControlError::UnknownFault { name: fault }))?,

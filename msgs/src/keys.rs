@@ -113,7 +113,7 @@ impl WorldName {
             Topic::Joystick | Topic::Winch | Topic::Boom | Topic::Actuator => {
                 Some(format!("{KEY_PREFIX}/{}/{IOX_INPUT_SERVICE}", self.0))
             }
-            Topic::Scene | Topic::Control => None,
+            Topic::Scene | Topic::Control | Topic::Applied | Topic::Keyframes => None,
         }
     }
 
@@ -166,6 +166,11 @@ pub enum Topic {
     Signals,
     /// Threshold crossings and faults, published at the steps that have them.
     Events,
+    /// What changed the world before a step (inputs, world-acting control requests, deadman
+    /// trips), published at the steps that had any.
+    Applied,
+    /// Snapshots of the state, every few seconds and at each new scene state.
+    Keyframes,
     /// Joystick inputs.
     Joystick,
     /// Winch commands.
@@ -182,11 +187,13 @@ pub enum Topic {
 
 impl Topic {
     /// Every topic.
-    pub const ALL: [Topic; 10] = [
+    pub const ALL: [Topic; 12] = [
         Topic::Poses,
         Topic::Stats,
         Topic::Signals,
         Topic::Events,
+        Topic::Applied,
+        Topic::Keyframes,
         Topic::Joystick,
         Topic::Winch,
         Topic::Boom,
@@ -205,6 +212,8 @@ impl Topic {
             Topic::Stats => "stats",
             Topic::Signals => "signals",
             Topic::Events => "events",
+            Topic::Applied => "applied",
+            Topic::Keyframes => "keyframes",
             Topic::Joystick => "cmd/joystick",
             Topic::Winch => "cmd/winch",
             Topic::Boom => "cmd/boom",
@@ -228,6 +237,8 @@ impl Topic {
             Topic::Stats => Kind::SolverStats,
             Topic::Signals => Kind::Signals,
             Topic::Events => Kind::Events,
+            Topic::Applied => Kind::Applied,
+            Topic::Keyframes => Kind::Keyframe,
             Topic::Joystick => Kind::Joystick,
             Topic::Winch => Kind::Winch,
             Topic::Boom => Kind::Boom,
@@ -295,6 +306,8 @@ mod tests {
                 "pivotsim/crane-1/stats",
                 "pivotsim/crane-1/signals",
                 "pivotsim/crane-1/events",
+                "pivotsim/crane-1/applied",
+                "pivotsim/crane-1/keyframes",
                 "pivotsim/crane-1/cmd/joystick",
                 "pivotsim/crane-1/cmd/winch",
                 "pivotsim/crane-1/cmd/boom",

@@ -31,6 +31,9 @@ struct Cli {
 enum Command {
     /// Serve a scene in real time over Zenoh and iceoryx2 (the default command).
     Serve(cli::serve::ServeArgs),
+    /// Replay a recorded session (`pivotsim-client record`) bit for bit: served like a live
+    /// server, or checked (`--check`); `--from T`, `--branch T` (README "Rig control").
+    Replay(cli::replay::ReplayArgs),
     /// Run a scene headless under its script, as fast as possible, and print a summary.
     Run {
         /// A built-in scene name (see `scenes`) or a scene file path.
@@ -206,6 +209,7 @@ fn main() -> ExitCode {
             cli::report::run(&cfg).map(|_| ())
         }
         Some(Command::Serve(args)) => cli::serve::serve(args),
+        Some(Command::Replay(args)) => cli::replay::replay(args),
         None => cli::serve::serve(cli.serve),
     };
     match result {

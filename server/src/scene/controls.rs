@@ -490,7 +490,7 @@ pub struct JoystickMap {
     pub axes: Vec<JoyAxis>,
     /// Mapped buttons.
     pub buttons: Vec<JoyButton>,
-    last_buttons: Vec<bool>,
+    pub(crate) last_buttons: Vec<bool>,
 }
 
 impl JoystickMap {

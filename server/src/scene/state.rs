@@ -38,6 +38,8 @@ pub struct SceneState {
     pub faults: Vec<Fault>,
     /// Signals.
     pub signals: SignalsState,
+    /// The joystick mapping's buttons as last read (a button's event fires on its press).
+    pub(crate) joystick_buttons: Vec<bool>,
 }
 
 /// Why a state does not fit a scene (it is another scene's, or damaged).
@@ -76,6 +78,7 @@ impl Scene {
             ramps: self.script.ramps.clone(),
             faults: self.faults.list().to_vec(),
             signals: self.signals.state(),
+            joystick_buttons: self.joystick.last_buttons.clone(),
         })
     }
 
@@ -92,6 +95,7 @@ impl Scene {
         self.script.next = state.script_next;
         self.script.ramps.clone_from(&state.ramps);
         self.faults.restore(&state.faults, &mut self.signals);
+        self.joystick.last_buttons.clone_from(&state.joystick_buttons);
         self.signals.evaluate(&self.world);
         Ok(())
     }
@@ -104,6 +108,10 @@ impl Scene {
         }
         if s.actuators.iter().any(|a| !(a.value.is_finite() && a.applied.is_finite())) {
             return Err(SceneStateError::NonFinite("an actuator's value"));
+        }
+        let buttons = self.joystick.last_buttons.len();
+        if s.joystick_buttons.len() != buttons {
+            return mismatch("joystick buttons", buttons, s.joystick_buttons.len());
         }
         let entries = self.script.entries.len();
         if s.script_next > entries {

@@ -36,6 +36,8 @@ use tracing::{info, warn};
 use std::sync::Arc;
 
 use super::describe::{actuator_mode, describe};
+use super::journal::{DEFAULT_KEYFRAME_EVERY, Journal};
+use super::replay::{Divergence, Keyframe, Recording, ReplayError, compare_poses, compare_snapshots};
 use super::loader::{LoadError, LoadJob, LoadPolicy, Loaded};
 use crate::dynamics::{BodyKind, Watchdog};
 use crate::scene::{self, ActuatorKind, Scene, SceneError};
@@ -90,6 +92,51 @@ pub struct Engine {
     policy: Arc<LoadPolicy>,
     /// Where `snapshot` writes and `restore` reads (`serve --snapshot-dir`; none: both refused).
     snapshot_dir: Option<PathBuf>,
+    /// What changed the world before each step, and keyframes (`journal.rs`).
+    journal: Journal,
+    /// Replaying a recording: the deadman never trips on the wall clock (the recording's trips
+    /// are applied where they happened).
+    replaying: bool,
+    /// The recording a replay follows (`replay.rs`), until it ends, diverges or branches.
+    replay: Option<Feed>,
+    replay_progress: ReplayProgress,
+}
+
+/// A replay under way.
+#[derive(Debug)]
+struct Feed {
+    recording: Arc<Recording>,
+    /// Live inputs drive from this time on.
+    branch: Option<f64>,
+    /// The last sequence compared.
+    checked: Option<u64>,
+}
+
+/// What a replay did so far.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct ReplayProgress {
+    /// Replayed pose frames equal to the recorded ones.
+    pub poses_compared: u64,
+    /// Replayed states whose pose frame the recording lacks (not compared).
+    pub poses_missing: u64,
+    /// Keyframes compared with the replay's own snapshot.
+    pub keyframes_compared: u64,
+    /// The first difference (the replay stopped there).
+    pub divergence: Option<Divergence>,
+    /// The recording's end was reached.
+    pub finished: bool,
+    /// `--branch` was reached: live inputs drive.
+    pub branched: bool,
+}
+
+/// What the replay does instead of, or before, a step.
+enum ReplayStep {
+    /// Step (the records of the step applied).
+    Step,
+    /// A new scene state was installed: it is the step.
+    Installed,
+    /// The replay stopped; the world is paused.
+    Stop,
 }
 
 /// What a control request asks of the loop ([`Engine::begin_control`]).
@@ -137,6 +184,18 @@ impl Engine {
             file: scene_ref.to_string(),
             source: scene::OverrideError::Key(format!("max_solve_us: {e}")),
         })?;
+        Ok(Engine::from_scene(scene, scene_ref, world_name, deadman, overrides, max_solve_us))
+    }
+
+    /// The engine of a scene already built (its budget applied).
+    fn from_scene(
+        scene: Scene,
+        scene_ref: &str,
+        world_name: msgs::WorldName,
+        deadman: Duration,
+        overrides: &[scene::SceneOverride],
+        max_solve_us: Option<f64>,
+    ) -> Engine {
         let watchdog = Watchdog::new(&scene.world, scene.watchdog);
         let mut e = Engine {
             scene_ref: scene_ref.to_string(),
@@ -173,6 +232,10 @@ impl Engine {
             max_solve_us: None,
             policy: Arc::new(LoadPolicy::default()),
             snapshot_dir: None,
+            journal: Journal::new(DEFAULT_KEYFRAME_EVERY),
+            replaying: false,
+            replay: None,
+            replay_progress: ReplayProgress::default(),
         };
         e.overrides = overrides.to_vec();
         e.start_scene = scene_ref.to_string();
@@ -180,13 +243,178 @@ impl Engine {
         e.set_load_policy(LoadPolicy::default());
         e.scene_changed();
         e.encode_frames(0);
+        e
+    }
+
+    /// The engine of a replay (`replay.rs`): the keyframe's scene, built from the text its
+    /// snapshot carries, in the keyframe's state (sequence, operator flag, watchdog ledger),
+    /// paused, with `recording` to follow from there (`branch`: live inputs drive from that time).
+    /// The deadman never trips on the wall clock: the recording's trips are applied.
+    pub fn replay(
+        recording: Arc<Recording>,
+        start: &Keyframe,
+        world_name: msgs::WorldName,
+        branch: Option<f64>,
+    ) -> Result<Engine, ReplayError> {
+        let snapshot_error = |source| ReplayError::Snapshot { sequence: start.sequence, source };
+        let snap = Snapshot::from_bytes(&start.snapshot).map_err(snapshot_error)?;
+        let scene = snap.to_scene().map_err(snapshot_error)?;
+        let source = scene.source.clone();
+        let mut e = Engine::from_scene(scene, &source, world_name, Duration::from_secs(1), &[], None);
+        e.adopt(&snap, start.sequence);
+        e.replaying = true;
+        e.replay = Some(Feed { recording, branch, checked: Some(start.sequence) });
+        e.encode_frames(pivotsim_link::wall_ns());
         Ok(e)
+    }
+
+    /// Takes over a snapshot's runner state as the state `sequence`: paused, operator flag and
+    /// watchdog ledger from the snapshot.
+    fn adopt(&mut self, snap: &Snapshot, sequence: u64) {
+        self.watchdog =
+            snap.watchdog.clone().unwrap_or_else(|| Watchdog::new(&self.scene.world, self.scene.watchdog));
+        self.manual = snap.operator;
+        self.paused = true;
+        self.sequence = sequence;
+        self.journal.new_scene_state();
+    }
+
+    /// How the replay went so far (all zero when this engine replays nothing).
+    pub fn replay_progress(&self) -> &ReplayProgress {
+        &self.replay_progress
+    }
+
+    /// Whether a recording still drives the world (neither ended, diverged nor branched).
+    pub fn is_replaying(&self) -> bool {
+        self.replay.is_some()
+    }
+
+    /// Before a replayed step: a new scene state the session installed at the next sequence, or
+    /// the records applied before the next step; `false` when the replay stopped here (ended,
+    /// diverged) and the world is paused.
+    fn replay_before_step(&mut self) -> ReplayStep {
+        let Some(feed) = &self.replay else { return ReplayStep::Step };
+        let rec = feed.recording.clone();
+        let branch = feed.branch;
+        let h = self.scene.world.settings().timestep;
+        if branch.is_some_and(|t| self.scene.world.time() + 0.5 * h >= t) {
+            info!("replay branched at {:.4} s: live inputs drive from here", self.scene.world.time());
+            self.replay = None;
+            self.replaying = false;
+            self.replay_progress.branched = true;
+            return ReplayStep::Step;
+        }
+        let next = self.sequence + 1;
+        if next > rec.last_sequence() {
+            info!("replay finished at sequence {} ({:.4} s)", self.sequence, self.scene.world.time());
+            self.replay = None;
+            self.replay_progress.finished = true;
+            self.paused = branch.is_none();
+            self.replaying = branch.is_none();
+            return if self.paused { ReplayStep::Stop } else { ReplayStep::Step };
+        }
+        if let Some(k) = rec.scene_keyframe(next) {
+            let installed = Snapshot::from_bytes(&k.snapshot).and_then(|s| s.to_scene().map(|sc| (s, sc)));
+            return match installed {
+                Ok((snap, scene)) => {
+                    self.scene = scene;
+                    self.scene_changed();
+                    self.adopt(&snap, next);
+                    self.paused = false;
+                    ReplayStep::Installed
+                }
+                Err(e) => {
+                    self.diverge(next, format!("the session's new scene state does not restore: {e}"));
+                    ReplayStep::Stop
+                }
+            };
+        }
+        for r in rec.applied.get(&next).map(Vec::as_slice).unwrap_or_default() {
+            match r.kind {
+                msgs::AppliedKind::Input => {
+                    if let Err(reason) = self.try_input(None, &r.bytes, Instant::now()) {
+                        self.diverge(next, format!("a recorded input was refused ({})", reason.name()));
+                        return ReplayStep::Stop;
+                    }
+                    self.health.accepted = self.health.accepted.saturating_add(1);
+                }
+                msgs::AppliedKind::Control => match msgs::ControlRequest::decode(&r.bytes) {
+                    Ok(req) => {
+                        self.journal.record(msgs::AppliedKind::Control, &r.bytes);
+                        let _ = self.control(&req.command);
+                    }
+                    Err(e) => {
+                        self.diverge(next, format!("a recorded control request does not decode: {e}"));
+                        return ReplayStep::Stop;
+                    }
+                },
+                msgs::AppliedKind::Deadman => self.trip_deadman(),
+            }
+        }
+        ReplayStep::Step
+    }
+
+    /// After a new state's frames: its pose frame against the recorded one, and a periodic
+    /// keyframe's snapshot against the replay's own.
+    fn replay_check(&mut self) {
+        let Some(feed) = &mut self.replay else { return };
+        if feed.checked == Some(self.sequence) {
+            return;
+        }
+        feed.checked = Some(self.sequence);
+        let rec = feed.recording.clone();
+        let p = &mut self.replay_progress;
+        match rec.poses.get(&self.sequence) {
+            Some(recorded) => {
+                p.poses_compared += 1;
+                if let Some(what) = compare_poses(&self.pose_buf, recorded) {
+                    return self.diverge(self.sequence, what);
+                }
+            }
+            None => p.poses_missing += 1,
+        }
+        if let Some(k) = rec.keyframe(self.sequence).filter(|k| k.reason != msgs::KeyframeReason::Scene) {
+            let mine = Snapshot::capture(&self.scene, Some(&self.watchdog)).map(|mut s| {
+                s.operator = self.manual;
+                s
+            });
+            let what = match mine {
+                Ok(s) => compare_snapshots(&s, &k.snapshot),
+                Err(e) => Some(format!("no snapshot of the replay: {e}")),
+            };
+            self.replay_progress.keyframes_compared += 1;
+            if let Some(what) = what {
+                self.diverge(self.sequence, format!("keyframe: {what}"));
+            }
+        }
+    }
+
+    fn diverge(&mut self, sequence: u64, what: String) {
+        let d = Divergence { sequence, sim_time: self.scene.world.time(), what };
+        tracing::error!("replay {d}; stopped (paused) there");
+        self.replay_progress.divergence = Some(d);
+        self.replay = None;
+        self.paused = true;
+    }
+
+    /// The deadman trips: every actuator to neutral (journaled).
+    fn trip_deadman(&mut self) {
+        self.journal.record(msgs::AppliedKind::Deadman, &[]);
+        self.scene.controls.neutralize(&self.scene.world);
+        self.health.deadman_active = true;
+        self.health.deadman_trips = self.health.deadman_trips.saturating_add(1);
     }
 
     /// Sets what `load_scene` and `reset` may read (the start scene stays loadable).
     pub fn set_load_policy(&mut self, mut policy: LoadPolicy) {
         policy.trust_start_scene(&self.start_scene);
         self.policy = Arc::new(policy);
+    }
+
+    /// Keyframes every `every` seconds of simulation time (`serve --keyframes`; 0: only at new
+    /// scene states and on request); the current state gets one with its next frames.
+    pub fn set_keyframe_every(&mut self, every: f64) {
+        self.journal = Journal::new(every);
     }
 
     /// Sets where `snapshot` writes and `restore` reads (`None`: both are refused).
@@ -239,6 +467,7 @@ impl Engine {
         self.failure = None;
         self.unstable = false;
         self.events_sequence = None;
+        self.journal.new_scene_state();
         self.sequence += 1;
         self.encode_frames(pivotsim_link::wall_ns());
         info!("`{}` restored to {:.3} s from {}", self.scene.name, snap.time(), file.display());
@@ -307,6 +536,8 @@ impl Engine {
             stats: &self.stats_buf,
             signals: &self.signals_buf,
             events: &self.events_buf,
+            applied: self.journal.applied(),
+            keyframe: self.journal.keyframe(),
         }
     }
 
@@ -372,7 +603,11 @@ impl Engine {
         bytes: &[u8],
         now: Instant,
     ) -> Result<(), msgs::RejectReason> {
-        let r = self.try_input(topic, bytes, now);
+        // A replay refuses live inputs until it ends or branches.
+        let r = match self.replay.is_some() {
+            true => Err(msgs::RejectReason::Other),
+            false => self.try_input(topic, bytes, now),
+        };
         match r {
             Ok(()) => self.health.accepted = self.health.accepted.saturating_add(1),
             Err(reason) => self.health.reject(reason),
@@ -397,6 +632,7 @@ impl Engine {
             return Err(msgs::RejectReason::Stale);
         }
         self.apply_input(&cmd)?;
+        self.journal.record(msgs::AppliedKind::Input, bytes);
         self.last_seq.insert(cmd.source_id(), cmd.sequence());
         self.manual = true;
         self.last_input = Some(now);
@@ -567,7 +803,7 @@ impl Engine {
                     msgs::ControlCommand::LoadScene { scene } => Some(scene.clone()),
                     _ => None,
                 };
-                if let Some(scene_ref) = scene_ref {
+                if let Some(scene_ref) = scene_ref.filter(|_| self.replay.is_none()) {
                     let overrides =
                         if scene_ref == self.start_scene { self.overrides.clone() } else { Vec::new() };
                     return ControlStep::Load(LoadJob::new(
@@ -576,6 +812,20 @@ impl Engine {
                         self.policy.clone(),
                         overrides,
                     ));
+                }
+                let world_changing = matches!(
+                    req.command,
+                    msgs::ControlCommand::Fault { .. }
+                        | msgs::ControlCommand::SetVariant { .. }
+                        | msgs::ControlCommand::Restore { .. }
+                );
+                if world_changing && self.replay.is_some() {
+                    let msg = "a recording is being replayed (until its end or --branch)";
+                    return ControlStep::Reply(encode_reply(&msgs::ControlReply::error(
+                        req.id,
+                        msgs::ControlErrorCode::Busy,
+                        msg,
+                    )));
                 }
                 let lockstep = match req.command {
                     msgs::ControlCommand::Step { count } => Some(self.steps_for(count)),
@@ -588,6 +838,14 @@ impl Engine {
                         return ControlStep::Steps(StepJob { id: req.id, remaining: count, report });
                     }
                     Some(Err((code, msg))) => msgs::ControlReply::error(req.id, code, msg),
+                    None if matches!(req.command, msgs::ControlCommand::Fault { .. } | msgs::ControlCommand::SetVariant { .. }) => {
+                        // Acts on the world: journaled (a refused fault is an event too).
+                        self.journal.record(msgs::AppliedKind::Control, bytes);
+                        match self.control(&req.command) {
+                            Ok(()) => msgs::ControlReply::ok(req.id, self.status()),
+                            Err((code, msg)) => msgs::ControlReply::error(req.id, code, msg),
+                        }
+                    }
                     None => match self.control(&req.command) {
                         Ok(()) => msgs::ControlReply::ok(req.id, self.status()),
                         Err((code, msg)) => msgs::ControlReply::error(req.id, code, msg),
@@ -628,6 +886,7 @@ impl Engine {
                 return Err((E::Internal, "not a direct control request".into()));
             }
             C::Snapshot { path } => self.write_snapshot(path)?,
+            C::Keyframe => self.journal.request_keyframe(msgs::KeyframeReason::Requested),
             C::Restore { path } => self.restore_snapshot(path)?,
             C::SetVariant { variant } => {
                 let v = Variant::from(*variant);
@@ -668,6 +927,7 @@ impl Engine {
         self.scene_ref = scene_ref.to_string();
         self.paused = true;
         self.scene_changed();
+        self.journal.new_scene_state();
         // A new state gets a new sequence: the previous one's frames stay its own.
         self.sequence += 1;
         self.encode_frames(pivotsim_link::wall_ns());
@@ -679,10 +939,8 @@ impl Engine {
     pub fn tick(&mut self, now: Instant) -> bool {
         if self.manual && !self.health.deadman_active {
             let silent = self.last_input.is_none_or(|t| now.saturating_duration_since(t) > self.deadman);
-            if silent {
-                self.scene.controls.neutralize(&self.scene.world);
-                self.health.deadman_active = true;
-                self.health.deadman_trips = self.health.deadman_trips.saturating_add(1);
+            if silent && !self.replaying {
+                self.trip_deadman();
                 info!("deadman: no input for {:?}, actuators at neutral", self.deadman);
             }
         }
@@ -695,6 +953,11 @@ impl Engine {
     }
 
     fn step_once(&mut self) -> bool {
+        match self.replay_before_step() {
+            ReplayStep::Step => {}
+            ReplayStep::Installed => return true,
+            ReplayStep::Stop => return false,
+        }
         let t0 = Instant::now();
         let r = if self.manual { self.scene.step_manual() } else { self.scene.step() };
         self.step_wall_us = t0.elapsed().as_secs_f64() * 1e6;
@@ -790,6 +1053,8 @@ impl Engine {
                 );
             }
         }
+        self.journal.encode(self.sequence, &self.scene, &self.watchdog, self.manual);
+        self.replay_check();
     }
 }
 

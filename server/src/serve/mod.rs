@@ -6,8 +6,10 @@
 //! |---|---|
 //! | `config.rs` | what the server runs and how, and why it could not start |
 //! | `engine.rs` | transport-free state machine: inputs, deadman, control, frames |
+//! | `journal.rs` | what changed the world before each step, and keyframes, for recordings |
 //! | `loader.rs` | scenes for `load_scene` and `reset`: confined, size-bounded, built off the step thread |
 //! | `transport.rs` | what the loop and its transports share: the inbox, one step's frames, the trait |
+//! | `replay.rs` | recordings read back, compared state by state with the replay |
 //! | `pacing.rs` | real-time pacing and the status line |
 //! | `describe.rs` | the scene description for renderers and consoles |
 //! | `zenoh_io.rs` | Zenoh: publishers, the `cmd/**` subscriber, the `scene` and `control` queryables |
@@ -34,10 +36,12 @@
 pub mod config;
 pub mod describe;
 pub mod engine;
+pub mod journal;
 #[cfg(feature = "iceoryx2")]
 pub mod iox;
 pub mod loader;
 pub mod pacing;
+pub mod replay;
 pub mod transport;
 pub mod wire;
 #[cfg(feature = "zenoh")]
@@ -91,6 +95,8 @@ pub struct ServeReport {
     pub sim_time: f64,
     /// Input counters at the end.
     pub inputs: msgs::InputHealth,
+    /// What a replay did (all zero when the server replayed nothing).
+    pub replay: engine::ReplayProgress,
 }
 
 /// Runs the server until `shutdown` is set (or `max_steps`); the in-process entry point that
@@ -119,7 +125,20 @@ pub fn run_with(
     )?;
     engine.set_load_policy(policy);
     engine.set_snapshot_dir(config.snapshot_dir.clone());
+    engine.set_keyframe_every(config.keyframes);
     engine.set_paused(config.start_paused);
+    run_engine(config, engine, shutdown, on_start)
+}
+
+/// [`run_with`] for an engine already built (a replay's, `replay.rs`): the configuration's
+/// transports, pace and bounds; its scene options are the engine's business.
+pub fn run_engine(
+    config: &ServeConfig,
+    mut engine: Engine,
+    shutdown: Arc<AtomicBool>,
+    on_start: impl FnOnce(&Started),
+) -> Result<ServeReport, ServeError> {
+    let world = msgs::WorldName::new(config.world.clone())?;
     let mut loader = loader::Loader::spawn()
         .map_err(|e| ServeError::Option(format!("cannot start the scene loader thread: {e}")))?;
     if let Some(r) = config.realtime_factor {
@@ -172,7 +191,7 @@ pub fn run_with(
     on_start(&started);
     let report = serve_loop(config, &mut engine, &mut loader, &mut transports, &tx, &rx, &shutdown);
     info!("server stopped after {} steps ({} overruns)", report.steps, report.overruns);
-    Ok(report)
+    Ok(ServeReport { replay: engine.replay_progress().clone(), ..report })
 }
 
 fn serve_loop(
@@ -294,6 +313,7 @@ fn serve_loop(
         wall_s: start.elapsed().as_secs_f64(),
         sim_time: engine.scene().world.time(),
         inputs: *engine.health(),
+        replay: engine::ReplayProgress::default(),
     }
 }
 

@@ -76,6 +76,10 @@ pub struct Frames<'a> {
     pub signals: &'a [u8],
     /// Events (`events`); empty when the step had none: nothing is published.
     pub events: &'a [u8],
+    /// Applied frames (`applied`, Zenoh only): none when the step applied nothing.
+    pub applied: &'a [Vec<u8>],
+    /// Keyframe (`keyframes`, Zenoh only); empty when none was due.
+    pub keyframe: &'a [u8],
 }
 
 /// A transport as the loop sees it.

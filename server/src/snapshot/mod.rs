@@ -83,6 +83,10 @@ pub struct Snapshot {
     pub state: SceneState,
     /// The instability watchdog's ledger, when the runner keeps one.
     pub watchdog: Option<Watchdog>,
+    /// Whether an operator drove the actuators (the server's inputs) rather than the scene's
+    /// script; a headless run's snapshot says `false`. A replay from a keyframe restores it; a
+    /// `restore` request and `run --from` hand control to the script, as after a load.
+    pub operator: bool,
 }
 
 /// Why a snapshot could not be taken, read or restored.
@@ -150,6 +154,7 @@ impl Snapshot {
             scene: SceneRef::of(scene),
             state: scene.state()?,
             watchdog: watchdog.cloned(),
+            operator: false,
         })
     }
 
