@@ -322,7 +322,10 @@ pub fn run(common: &Common, args: &Args) -> Result<ExitCode> {
     // A keyframe of the state now: the replay's starting point (best effort: an older server, or
     // one that does not answer, leaves the recording to the next periodic keyframe).
     if let Some(z) = stream.zenoh() {
-        let req = msgs::ControlRequest { id: u64::from(crate::util::random_u32()), command: msgs::ControlCommand::Keyframe };
+        let req = msgs::ControlRequest {
+            id: u64::from(crate::util::random_u32()),
+            command: msgs::ControlCommand::Keyframe,
+        };
         match z.control(&req, common.timeout_or(2.0)) {
             Ok(r) if matches!(r.outcome, msgs::ControlOutcome::Ok(_)) => {}
             Ok(r) => eprintln!("pivotsim-client: the server refused a keyframe: {:?}", r.outcome),

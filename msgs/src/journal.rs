@@ -233,26 +233,34 @@ impl AppliedFrame {
         let kind = Kind::Applied;
         let p = header::expect(bytes, kind)?;
         if p.len() < APPLIED_FIXED_LEN {
-            return Err(FrameError::PayloadLength { kind, expected: APPLIED_FIXED_LEN, found: p.len() }.into());
+            return Err(
+                FrameError::PayloadLength { kind, expected: APPLIED_FIXED_LEN, found: p.len() }.into()
+            );
         }
         let n = le::u32_at(p, 16) as usize;
         if n > MAX_APPLIED {
             return Err(DecodeError::Invalid(JournalError::TooManyRecords { found: n }));
         }
         header::check_reserved(p, 20..24, HEADER_LEN)?;
-        let mut f = AppliedFrame { sequence: le::u64_at(p, 0), sim_time: le::f64_at(p, 8), records: Vec::new() };
+        let mut f =
+            AppliedFrame { sequence: le::u64_at(p, 0), sim_time: le::f64_at(p, 8), records: Vec::new() };
         check_time(f.sim_time).map_err(DecodeError::Invalid)?;
         let mut at = APPLIED_FIXED_LEN;
         for i in 0..n {
             if p.len() < at + APPLIED_RECORD_HEAD_LEN {
-                return Err(FrameError::PayloadLength { kind, expected: at + APPLIED_RECORD_HEAD_LEN, found: p.len() }
-                    .into());
+                return Err(FrameError::PayloadLength {
+                    kind,
+                    expected: at + APPLIED_RECORD_HEAD_LEN,
+                    found: p.len(),
+                }
+                .into());
             }
             let code = p[at];
-            let kind_i = AppliedKind::from_code(code).ok_or(DecodeError::Invalid(JournalError::UnknownCode {
-                what: "applied record kind",
-                code: u32::from(code),
-            }))?;
+            let kind_i =
+                AppliedKind::from_code(code).ok_or(DecodeError::Invalid(JournalError::UnknownCode {
+                    what: "applied record kind",
+                    code: u32::from(code),
+                }))?;
             header::check_reserved(p, at + 1..at + 4, HEADER_LEN)?;
             let len = le::u32_at(p, at + 4) as usize;
             let body = at + APPLIED_RECORD_HEAD_LEN;
@@ -295,13 +303,20 @@ impl<'a> KeyframeView<'a> {
         let kind = Kind::Keyframe;
         let p = header::expect(bytes, kind)?;
         if p.len() < KEYFRAME_FIXED_LEN {
-            return Err(FrameError::PayloadLength { kind, expected: KEYFRAME_FIXED_LEN, found: p.len() }.into());
+            return Err(
+                FrameError::PayloadLength { kind, expected: KEYFRAME_FIXED_LEN, found: p.len() }.into()
+            );
         }
         header::check_reserved(p, 20..24, HEADER_LEN)?;
         let code = le::u32_at(p, 16);
         let reason = KeyframeReason::from_code(code)
             .ok_or(DecodeError::Invalid(JournalError::UnknownCode { what: "keyframe reason", code }))?;
-        let v = KeyframeView { sequence: le::u64_at(p, 0), sim_time: le::f64_at(p, 8), reason, snapshot: &p[24..] };
+        let v = KeyframeView {
+            sequence: le::u64_at(p, 0),
+            sim_time: le::f64_at(p, 8),
+            reason,
+            snapshot: &p[24..],
+        };
         check_time(v.sim_time).map_err(DecodeError::Invalid)?;
         if !v.snapshot.starts_with(&SNAPSHOT_MAGIC) {
             return Err(DecodeError::Invalid(JournalError::NotASnapshot));
@@ -337,17 +352,26 @@ mod tests {
         // The first record's padding (3 bytes of data, 5 of zeros) must be zero.
         let mut x = b.clone();
         x[16 + 24 + 8 + 3] = 1;
-        assert!(matches!(AppliedFrame::decode(&x), Err(DecodeError::Frame(FrameError::ReservedNonZero { .. }))));
+        assert!(matches!(
+            AppliedFrame::decode(&x),
+            Err(DecodeError::Frame(FrameError::ReservedNonZero { .. }))
+        ));
         // A length that runs past the frame.
         let mut x = b.clone();
         x[16 + 24 + 4] = 200;
-        assert!(matches!(AppliedFrame::decode(&x), Err(DecodeError::Invalid(JournalError::RecordLength { .. }))));
+        assert!(matches!(
+            AppliedFrame::decode(&x),
+            Err(DecodeError::Invalid(JournalError::RecordLength { .. }))
+        ));
         // Cut short.
         assert!(AppliedFrame::decode(&b[..b.len() - 8]).is_err());
         // A record kind this version does not know.
         let mut x = b.clone();
         x[16 + 24] = 7;
-        assert!(matches!(AppliedFrame::decode(&x), Err(DecodeError::Invalid(JournalError::UnknownCode { .. }))));
+        assert!(matches!(
+            AppliedFrame::decode(&x),
+            Err(DecodeError::Invalid(JournalError::UnknownCode { .. }))
+        ));
     }
 
     #[test]
@@ -367,7 +391,8 @@ mod tests {
     fn keyframes_round_trip_and_hold_snapshots_only() {
         let mut snap = SNAPSHOT_MAGIC.to_vec();
         snap.extend_from_slice(&[5; 13]);
-        let k = KeyframeView { sequence: 3, sim_time: 5.0, reason: KeyframeReason::Periodic, snapshot: &snap };
+        let k =
+            KeyframeView { sequence: 3, sim_time: 5.0, reason: KeyframeReason::Periodic, snapshot: &snap };
         let mut b = Vec::new();
         k.encode(&mut b).unwrap();
         assert_eq!(KeyframeView::parse(&b).unwrap(), k);
@@ -376,7 +401,10 @@ mod tests {
         assert_eq!(KeyframeView::parse(&x), Err(DecodeError::Invalid(JournalError::NotASnapshot)));
         let mut x = b.clone();
         x[16 + 16] = 9;
-        assert!(matches!(KeyframeView::parse(&x), Err(DecodeError::Invalid(JournalError::UnknownCode { .. }))));
+        assert!(matches!(
+            KeyframeView::parse(&x),
+            Err(DecodeError::Invalid(JournalError::UnknownCode { .. }))
+        ));
         let bad = KeyframeView { snapshot: b"not one", ..k };
         assert_eq!(bad.encode(&mut Vec::new()), Err(JournalError::NotASnapshot));
     }

@@ -44,14 +44,14 @@ pub use input::{
     ACTUATOR_LEN, ActuatorCommand, BOOM_ENTRY_LEN, BOOM_FIXED_LEN, BoomCommand, BoomTarget, InputCommand,
     InputError, JOYSTICK_LEN, Joystick, MAX_AXES, MAX_BOOM_TARGETS, MAX_BUTTONS, WINCH_LEN, WinchCommand,
 };
+pub use journal::{
+    APPLIED_FIXED_LEN, APPLIED_RECORD_HEAD_LEN, AppliedFrame, AppliedKind, AppliedRecord, JournalError,
+    KEYFRAME_FIXED_LEN, KeyframeReason, KeyframeView, MAX_APPLIED, MAX_APPLIED_RECORD_LEN,
+    RECORD_TOPIC_APPLIED, RECORD_TOPIC_KEYFRAMES, RECORD_TOPIC_POSES, RECORD_WIRE_ENCODING, SNAPSHOT_MAGIC,
+};
 pub use keys::{
     DEFAULT_WORLD, IOX_INPUT_SERVICE, IOX_SUBSCRIBER_BUFFER, KEY_PREFIX, KeyError, MAX_WORLD_NAME_LEN,
     SERVER_TOKEN, Topic, WorldName, inputs_wildcard, parse_key,
-};
-pub use journal::{
-    APPLIED_FIXED_LEN, APPLIED_RECORD_HEAD_LEN, AppliedFrame, AppliedKind, AppliedRecord, JournalError, KEYFRAME_FIXED_LEN,
-    KeyframeReason, KeyframeView, MAX_APPLIED, MAX_APPLIED_RECORD_LEN, RECORD_TOPIC_APPLIED, RECORD_TOPIC_KEYFRAMES,
-    RECORD_TOPIC_POSES, RECORD_WIRE_ENCODING, SNAPSHOT_MAGIC,
 };
 pub use message::{Message, MessageError};
 pub use name::{ActuatorName, MAX_ACTUATOR_NAME_LEN, NameError, is_name_byte, validate_actuator_name};

@@ -141,7 +141,8 @@ impl Message {
             Message::Events(m) => m.encode(buf)?,
             Message::Applied(m) => m.encode(buf)?,
             Message::Keyframe { sequence, sim_time, reason, snapshot } => {
-                KeyframeView { sequence: *sequence, sim_time: *sim_time, reason: *reason, snapshot }.encode(buf)?
+                KeyframeView { sequence: *sequence, sim_time: *sim_time, reason: *reason, snapshot }
+                    .encode(buf)?
             }
             Message::Input(m) => m.encode(buf)?,
             Message::ControlRequest(m) => m.encode(buf)?,

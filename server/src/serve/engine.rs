@@ -37,8 +37,8 @@ use std::sync::Arc;
 
 use super::describe::{actuator_mode, describe};
 use super::journal::{DEFAULT_KEYFRAME_EVERY, Journal};
-use super::replay::{Divergence, Keyframe, Recording, ReplayError, compare_poses, compare_snapshots};
 use super::loader::{LoadError, LoadJob, LoadPolicy, Loaded};
+use super::replay::{Divergence, Keyframe, Recording, ReplayError, compare_poses, compare_snapshots};
 use crate::dynamics::{BodyKind, Watchdog};
 use crate::scene::{self, ActuatorKind, Scene, SceneError};
 use crate::snapshot::Snapshot;
@@ -137,6 +137,8 @@ enum ReplayStep {
     Installed,
     /// The replay stopped; the world is paused.
     Stop,
+    /// The branch time is reached: no step now; live inputs drive the next ones.
+    Branched,
 }
 
 /// What a control request asks of the loop ([`Engine::begin_control`]).
@@ -302,7 +304,7 @@ impl Engine {
             self.replay = None;
             self.replaying = false;
             self.replay_progress.branched = true;
-            return ReplayStep::Step;
+            return ReplayStep::Branched;
         }
         let next = self.sequence + 1;
         if next > rec.last_sequence() {
@@ -838,7 +840,11 @@ impl Engine {
                         return ControlStep::Steps(StepJob { id: req.id, remaining: count, report });
                     }
                     Some(Err((code, msg))) => msgs::ControlReply::error(req.id, code, msg),
-                    None if matches!(req.command, msgs::ControlCommand::Fault { .. } | msgs::ControlCommand::SetVariant { .. }) => {
+                    None if matches!(
+                        req.command,
+                        msgs::ControlCommand::Fault { .. } | msgs::ControlCommand::SetVariant { .. }
+                    ) =>
+                    {
                         // Acts on the world: journaled (a refused fault is an event too).
                         self.journal.record(msgs::AppliedKind::Control, bytes);
                         match self.control(&req.command) {
@@ -956,7 +962,7 @@ impl Engine {
         match self.replay_before_step() {
             ReplayStep::Step => {}
             ReplayStep::Installed => return true,
-            ReplayStep::Stop => return false,
+            ReplayStep::Stop | ReplayStep::Branched => return false,
         }
         let t0 = Instant::now();
         let r = if self.manual { self.scene.step_manual() } else { self.scene.step() };

@@ -128,7 +128,11 @@ impl Journal {
 }
 
 /// The snapshot bytes of a keyframe.
-pub fn keyframe(scene: &Scene, watchdog: &Watchdog, operator: bool) -> Result<Vec<u8>, crate::snapshot::SnapshotError> {
+pub fn keyframe(
+    scene: &Scene,
+    watchdog: &Watchdog,
+    operator: bool,
+) -> Result<Vec<u8>, crate::snapshot::SnapshotError> {
     let mut snap = Snapshot::capture(scene, Some(watchdog))?;
     snap.operator = operator;
     snap.to_bytes()

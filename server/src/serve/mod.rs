@@ -36,9 +36,9 @@
 pub mod config;
 pub mod describe;
 pub mod engine;
-pub mod journal;
 #[cfg(feature = "iceoryx2")]
 pub mod iox;
+pub mod journal;
 pub mod loader;
 pub mod pacing;
 pub mod replay;

@@ -28,14 +28,14 @@ use thiserror::Error;
 
 use crate::snapshot::{Snapshot, SnapshotError};
 
-/// Message encoding of the channels that carry wire frames byte for byte.
-pub use msgs::RECORD_WIRE_ENCODING as WIRE_ENCODING;
-/// The pose frames, as published.
-pub use msgs::RECORD_TOPIC_POSES as TOPIC_POSES;
 /// The applied frames, as published.
 pub use msgs::RECORD_TOPIC_APPLIED as TOPIC_APPLIED;
 /// The keyframes, as published.
 pub use msgs::RECORD_TOPIC_KEYFRAMES as TOPIC_KEYFRAMES;
+/// The pose frames, as published.
+pub use msgs::RECORD_TOPIC_POSES as TOPIC_POSES;
+/// Message encoding of the channels that carry wire frames byte for byte.
+pub use msgs::RECORD_WIRE_ENCODING as WIRE_ENCODING;
 /// Largest recording read (bytes): it is read into memory whole.
 pub const MAX_RECORDING_BYTES: u64 = 4 << 30;
 
@@ -124,19 +124,24 @@ impl Recording {
             if m.channel.message_encoding != WIRE_ENCODING {
                 continue;
             }
-            let ok = match m.channel.topic.as_str() {
-                TOPIC_POSES => rec.add_pose(&m.data),
-                TOPIC_APPLIED => rec.add_applied(&m.data),
-                TOPIC_KEYFRAMES => rec.add_keyframe(&m.data),
-                _ => true,
-            };
-            if !ok {
+            if [TOPIC_POSES, TOPIC_APPLIED, TOPIC_KEYFRAMES].contains(&m.channel.topic.as_str())
+                && !rec.add_frame(&m.data)
+            {
                 rec.malformed += 1;
             }
         }
-        rec.keyframes.sort_by_key(|k| k.sequence);
-        rec.keyframes.dedup_by_key(|k| k.sequence);
         Ok(rec)
+    }
+
+    /// Adds one wire frame (pose, applied or keyframe, by its header's kind); `false` when it
+    /// does not decode or is of another kind. Keyframes stay in sequence order.
+    pub fn add_frame(&mut self, frame: &[u8]) -> bool {
+        match msgs::header::peek(frame).map(|h| h.kind) {
+            Ok(msgs::Kind::PoseFrame) => self.add_pose(frame),
+            Ok(msgs::Kind::Applied) => self.add_applied(frame),
+            Ok(msgs::Kind::Keyframe) => self.add_keyframe(frame),
+            _ => false,
+        }
     }
 
     fn add_pose(&mut self, frame: &[u8]) -> bool {
@@ -162,12 +167,12 @@ impl Recording {
     fn add_keyframe(&mut self, frame: &[u8]) -> bool {
         match msgs::KeyframeView::parse(frame) {
             Ok(k) => {
-                self.keyframes.push(Keyframe {
-                    sequence: k.sequence,
-                    sim_time: k.sim_time,
-                    reason: k.reason,
-                    snapshot: k.snapshot.to_vec(),
-                });
+                if let Err(at) = self.keyframes.binary_search_by_key(&k.sequence, |k| k.sequence) {
+                    let snapshot = k.snapshot.to_vec();
+                    let kf =
+                        Keyframe { sequence: k.sequence, sim_time: k.sim_time, reason: k.reason, snapshot };
+                    self.keyframes.insert(at, kf);
+                }
                 true
             }
             Err(_) => false,
@@ -182,7 +187,10 @@ impl Recording {
         };
         let Some(t) = from else { return Ok(first) };
         self.keyframes.iter().take_while(|k| k.sim_time <= t + 1e-9).last().ok_or_else(|| {
-            ReplayError::NoKeyframe(format!("no keyframe at or before {t} s (the first is at {} s)", first.sim_time))
+            ReplayError::NoKeyframe(format!(
+                "no keyframe at or before {t} s (the first is at {} s)",
+                first.sim_time
+            ))
         })
     }
 
@@ -243,7 +251,10 @@ pub fn compare_poses(replayed: &[u8], recorded: &[u8]) -> Option<String> {
     for (x, y) in a.bodies.iter().zip(&b.bodies) {
         if x != y {
             let d = (0..3).map(|i| (x.position[i] - y.position[i]).abs()).fold(0.0, f64::max);
-            return Some(format!("body {}: position differs by {d:.3e} m (or its velocity or orientation)", x.id));
+            return Some(format!(
+                "body {}: position differs by {d:.3e} m (or its velocity or orientation)",
+                x.id
+            ));
         }
     }
     Some("the pose frames differ".into())
@@ -260,7 +271,9 @@ pub fn compare_snapshots(replayed: &Snapshot, recorded: &[u8]) -> Option<String>
     match (replayed.to_bytes(), rec.to_bytes()) {
         (Ok(a), Ok(b)) if a == b => None,
         (Ok(_), Ok(_)) if replayed.scene.digest != rec.scene.digest => Some("another scene".into()),
-        (Ok(_), Ok(_)) => Some("the keyframe's state differs (warm starts, contacts, signals or actuators)".into()),
+        (Ok(_), Ok(_)) => {
+            Some("the keyframe's state differs (warm starts, contacts, signals or actuators)".into())
+        }
         (Err(e), _) | (_, Err(e)) => Some(format!("a snapshot does not encode: {e}")),
     }
 }
