@@ -31,6 +31,9 @@ pub const MAX_WORLD_NAME_LEN: usize = 64;
 pub const DEFAULT_WORLD: &str = "default";
 /// Last segment of the Zenoh liveliness token of a world's server ([`WorldName::server_token`]).
 pub const SERVER_TOKEN: &str = "server";
+/// The segment under which lockstep controllers hold their liveliness tokens
+/// (`pivotsim/<world>/controller/<id>`).
+pub const CONTROLLER_TOKENS: &str = "controller";
 /// Last segment of the one iceoryx2 service that carries every input frame.
 pub const IOX_INPUT_SERVICE: &str = "cmd";
 /// Samples a subscriber of the server's iceoryx2 services buffers: the server creates them with
@@ -122,6 +125,18 @@ impl WorldName {
     /// start, and clients may watch it to know whether a server is up.
     pub fn server_token(&self) -> String {
         format!("{KEY_PREFIX}/{}/{SERVER_TOKEN}", self.0)
+    }
+
+    /// The liveliness token of the lockstep controller `id` (`pivotsim/<world>/controller/<id>`;
+    /// `id` follows the world-name rules): the server watches these and acts when the last one
+    /// goes away (`serve --on-controller-lost`).
+    pub fn controller_token(&self, id: &WorldName) -> String {
+        format!("{KEY_PREFIX}/{}/{CONTROLLER_TOKENS}/{}", self.0, id.0)
+    }
+
+    /// The key expression of every controller token of this world.
+    pub fn controller_tokens(&self) -> String {
+        format!("{KEY_PREFIX}/{}/{CONTROLLER_TOKENS}/*", self.0)
     }
 
     /// Clears `out` and writes the key of `topic` into it (no allocation once `out` has grown).

@@ -50,8 +50,8 @@ pub use journal::{
     RECORD_TOPIC_APPLIED, RECORD_TOPIC_KEYFRAMES, RECORD_TOPIC_POSES, RECORD_WIRE_ENCODING, SNAPSHOT_MAGIC,
 };
 pub use keys::{
-    DEFAULT_WORLD, IOX_INPUT_SERVICE, IOX_SUBSCRIBER_BUFFER, KEY_PREFIX, KeyError, MAX_WORLD_NAME_LEN,
-    SERVER_TOKEN, Topic, WorldName, inputs_wildcard, parse_key,
+    CONTROLLER_TOKENS, DEFAULT_WORLD, IOX_INPUT_SERVICE, IOX_SUBSCRIBER_BUFFER, KEY_PREFIX, KeyError,
+    MAX_WORLD_NAME_LEN, SERVER_TOKEN, Topic, WorldName, inputs_wildcard, parse_key,
 };
 pub use message::{Message, MessageError};
 pub use name::{ActuatorName, MAX_ACTUATOR_NAME_LEN, NameError, is_name_byte, validate_actuator_name};

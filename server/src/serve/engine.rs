@@ -35,6 +35,7 @@ use tracing::{info, warn};
 
 use std::sync::Arc;
 
+use super::config::ControllerLost;
 use super::describe::{actuator_mode, describe};
 use super::journal::{DEFAULT_KEYFRAME_EVERY, Journal};
 use super::loader::{LoadError, LoadJob, LoadPolicy, Loaded};
@@ -100,7 +101,15 @@ pub struct Engine {
     /// The recording a replay follows (`replay.rs`), until it ends, diverges or branches.
     replay: Option<Feed>,
     replay_progress: ReplayProgress,
+    /// Lockstep controllers whose liveliness tokens are up.
+    controllers: std::collections::BTreeSet<String>,
+    on_controller_lost: ControllerLost,
+    /// Controller events not yet published (the server's, not the scene's: not in `events_total`).
+    controller_events: Vec<msgs::EventRecord>,
 }
+
+/// Most lockstep controllers tracked at once.
+pub const MAX_CONTROLLERS: usize = 256;
 
 /// A replay under way.
 #[derive(Debug)]
@@ -238,6 +247,9 @@ impl Engine {
             replaying: false,
             replay: None,
             replay_progress: ReplayProgress::default(),
+            controllers: std::collections::BTreeSet::new(),
+            on_controller_lost: ControllerLost::default(),
+            controller_events: Vec::new(),
         };
         e.overrides = overrides.to_vec();
         e.start_scene = scene_ref.to_string();
@@ -411,6 +423,55 @@ impl Engine {
     pub fn set_load_policy(&mut self, mut policy: LoadPolicy) {
         policy.trust_start_scene(&self.start_scene);
         self.policy = Arc::new(policy);
+    }
+
+    /// What to do when the last lockstep controller goes away (`serve --on-controller-lost`).
+    pub fn set_on_controller_lost(&mut self, what: ControllerLost) {
+        self.on_controller_lost = what;
+    }
+
+    /// A lockstep controller's liveliness token appeared or went away (Zenoh liveliness: a
+    /// controller that exits, is killed or loses its link). Each change is an event
+    /// (`controller-joined`, `controller-lost`, named by the controller's id), published with the
+    /// next frames even while paused; when the last controller goes, the world pauses or resumes
+    /// real time as configured (the lost event's `value` is 1 when it resumed).
+    pub fn controller(&mut self, id: &str, present: bool) {
+        let name = msgs::ActuatorName::new(id)
+            .or_else(|_| msgs::ActuatorName::new("controller"))
+            .expect("a valid name");
+        let kind = match present {
+            true if self.controllers.len() < MAX_CONTROLLERS && self.controllers.insert(id.to_string()) => {
+                info!("lockstep controller `{id}` joined");
+                msgs::EventCode::ControllerJoined
+            }
+            false if self.controllers.remove(id) => msgs::EventCode::ControllerLost,
+            _ => return,
+        };
+        let mut value = 0.0;
+        if kind == msgs::EventCode::ControllerLost {
+            let last = self.controllers.is_empty();
+            match self.on_controller_lost {
+                ControllerLost::Resume if last => {
+                    self.paused = false;
+                    value = 1.0;
+                    warn!("lockstep controller `{id}` lost: real time resumes");
+                }
+                ControllerLost::Pause if last => {
+                    self.paused = true;
+                    warn!("lockstep controller `{id}` lost: the world stays paused");
+                }
+                _ => warn!("lockstep controller `{id}` lost ({} left)", self.controllers.len()),
+            }
+        }
+        if self.controller_events.len() < msgs::MAX_EVENTS {
+            let time = self.scene.world.time();
+            self.controller_events.push(msgs::EventRecord { name, kind, time, value, level: 0.0 });
+        }
+    }
+
+    /// Lockstep controllers present.
+    pub fn controllers(&self) -> usize {
+        self.controllers.len()
     }
 
     /// Keyframes every `every` seconds of simulation time (`serve --keyframes`; 0: only at new
@@ -1057,6 +1118,23 @@ impl Engine {
                     e.value,
                     e.level
                 );
+            }
+        }
+        if !self.controller_events.is_empty() {
+            // With this state's events, or in a frame of their own (a paused state's: its
+            // sequence may then carry two events frames, told apart by their records).
+            if self.events_buf.is_empty() {
+                self.events.sequence = self.sequence;
+                self.events.sim_time = w.time();
+                self.events.events_total = self.scene.signals.events_total();
+                self.events.events.clear();
+            }
+            let room = msgs::MAX_EVENTS - self.events.events.len().min(msgs::MAX_EVENTS);
+            let n = self.controller_events.len().min(room);
+            self.events.events.extend(self.controller_events.drain(..n));
+            self.controller_events.clear();
+            if let Err(e) = self.events.encode(&mut self.events_buf) {
+                warn!("events frame not encodable: {e}");
             }
         }
         self.journal.encode(self.sequence, &self.scene, &self.watchdog, self.manual);

@@ -127,6 +127,7 @@ pub fn run_with(
     engine.set_snapshot_dir(config.snapshot_dir.clone());
     engine.set_keyframe_every(config.keyframes);
     engine.set_paused(config.start_paused);
+    engine.set_on_controller_lost(config.on_controller_lost);
     run_engine(config, engine, shutdown, on_start)
 }
 
@@ -383,6 +384,10 @@ fn drain_inbox(
         match item {
             Inbound::Input { topic, bytes } => {
                 let _ = engine.handle_input(topic, &bytes, Instant::now());
+            }
+            Inbound::Controller { id, present } => {
+                engine.controller(&id, present);
+                republish = true;
             }
             Inbound::Control { bytes, reply } => {
                 let (generation, seq) = (engine.generation(), engine.sequence());

@@ -17,6 +17,13 @@ pub enum Inbound {
         /// The frame.
         bytes: Vec<u8>,
     },
+    /// A lockstep controller's liveliness token appeared (`present`) or went away.
+    Controller {
+        /// Its id (the token's last key segment).
+        id: String,
+        /// Whether it is there.
+        present: bool,
+    },
     /// A control request and where its reply goes.
     Control {
         /// The request frame.
@@ -31,6 +38,7 @@ impl std::fmt::Debug for Inbound {
         match self {
             Inbound::Input { topic, bytes } => write!(f, "Input({topic:?}, {} bytes)", bytes.len()),
             Inbound::Control { bytes, .. } => write!(f, "Control({} bytes)", bytes.len()),
+            Inbound::Controller { id, present } => write!(f, "Controller({id}, {present})"),
         }
     }
 }
@@ -54,7 +62,7 @@ impl InboxSender {
                 }
                 false
             }
-            Err(Inbound::Input { .. }) => false,
+            Err(Inbound::Input { .. } | Inbound::Controller { .. }) => false,
         }
     }
 }
