@@ -151,7 +151,7 @@ impl World {
         let joints =
             self.joints.iter().map(|j| JointState { enabled: j.enabled, motors: j.motors }).collect();
         let mut warm_contacts: Vec<_> = self.ws.warm_contacts.iter().map(|(k, w)| (*k, *w)).collect();
-        warm_contacts.sort_unstable_by(|a, b| row_key_order(&a.0).cmp(&row_key_order(&b.0)));
+        warm_contacts.sort_unstable_by_key(|a| row_key_order(&a.0));
         let narrow = self.contacts.phase.state().map_err(|e| WorldStateError::Unsupported(e.0.0, e.0.1))?;
         Ok(WorldState {
             time: self.time,
