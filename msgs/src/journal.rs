@@ -17,8 +17,8 @@
 //!                        0    8 sequence        u64, the state the snapshot holds
 //!                        8    8 sim_time        f64 (s)
 //!                       16    4 reason          0 periodic, 1 requested, 2 scene (start, load, reset, restore)
-//!                       20    4 reserved        0
-//!                       24      snapshot        a snapshot file (starts with b"PIVSNAP\0"), to the end
+//!                       20    4 snapshot_len    u32, payload_len = 24 + snapshot_len
+//!                       24      snapshot        a snapshot file (starts with b"PIVSNAP\0")
 //! ```
 //!
 //! An applied frame lists, in the order the server applied them, everything that changed the
@@ -292,7 +292,7 @@ impl<'a> KeyframeView<'a> {
         buf.extend_from_slice(&self.sequence.to_le_bytes());
         le::put_f64s(buf, &[self.sim_time]);
         buf.extend_from_slice(&(self.reason as u32).to_le_bytes());
-        buf.extend_from_slice(&0u32.to_le_bytes());
+        buf.extend_from_slice(&(self.snapshot.len() as u32).to_le_bytes());
         buf.extend_from_slice(self.snapshot);
         header::set_payload_len(buf);
         Ok(())
@@ -307,7 +307,10 @@ impl<'a> KeyframeView<'a> {
                 FrameError::PayloadLength { kind, expected: KEYFRAME_FIXED_LEN, found: p.len() }.into()
             );
         }
-        header::check_reserved(p, 20..24, HEADER_LEN)?;
+        let expected = KEYFRAME_FIXED_LEN + le::u32_at(p, 20) as usize;
+        if p.len() != expected {
+            return Err(FrameError::PayloadLength { kind, expected, found: p.len() }.into());
+        }
         let code = le::u32_at(p, 16);
         let reason = KeyframeReason::from_code(code)
             .ok_or(DecodeError::Invalid(JournalError::UnknownCode { what: "keyframe reason", code }))?;

@@ -557,6 +557,20 @@ pub fn sample_frames() -> Vec<(Kind, Vec<u8>)> {
             s
         }),
         Message::Events(sample_events()),
+        Message::Applied(AppliedFrame {
+            sequence: 12,
+            sim_time: 0.2,
+            records: vec![
+                AppliedRecord { kind: AppliedKind::Input, bytes: vec![1, 2, 3, 4, 5] },
+                AppliedRecord { kind: AppliedKind::Deadman, bytes: vec![] },
+            ],
+        }),
+        Message::Keyframe {
+            sequence: 12,
+            sim_time: 0.2,
+            reason: KeyframeReason::Periodic,
+            snapshot: [&SNAPSHOT_MAGIC[..], &[1, 2, 3]].concat(),
+        },
     ];
     msgs.iter()
         .map(|m| {
