@@ -231,6 +231,10 @@ fn serve_loop(
             described |= engine.generation() != generation;
             republish = true;
         }
+        // Replies a transport sends itself (iceoryx2) leave now, not at its next poll.
+        for t in transports.iter_mut() {
+            t.flush();
+        }
         let d = rx.dropped();
         while counted_drops < d {
             engine.count_dropped();
@@ -254,7 +258,12 @@ fn serve_loop(
             status.record_step(engine);
             match more {
                 true => lockstep = Some((job, reply)),
-                false => reply(engine.finish_steps(&job)),
+                false => {
+                    reply(engine.finish_steps(&job));
+                    for t in transports.iter_mut() {
+                        t.flush();
+                    }
+                }
             }
             if config.max_steps.is_some_and(|m| steps >= m) {
                 break;

@@ -94,8 +94,12 @@ pub struct Frames<'a> {
 pub trait Transport {
     /// Publishes one step's frames; never blocks on subscribers.
     fn publish(&mut self, frames: Frames<'_>);
-    /// Hands over inputs received since the last call (transports that poll).
+    /// Hands over inputs and control requests received since the last call (transports that
+    /// poll), and sends the replies the loop produced since.
     fn poll(&mut self, _inbox: &InboxSender) {}
+    /// Sends the control replies the loop produced since the last call, when the transport sends
+    /// them itself rather than in the reply closure (iceoryx2); the loop calls it after answering.
+    fn flush(&mut self) {}
     /// Whether inputs reach the loop only through [`Transport::poll`] (nothing wakes the loop
     /// for them): a paused loop then polls at short intervals while a controller is active.
     fn polled(&self) -> bool {
