@@ -55,6 +55,9 @@ pub enum Op {
         /// File name relative to the server's snapshot directory.
         path: String,
     },
+    /// Publish a keyframe (a snapshot on `keyframes`) of the current state with the next frames,
+    /// for a recorder that starts mid-session.
+    Keyframe,
     /// Restart the current scene, paused at time 0.
     Reset,
     /// Switch the solver variant (full, downdate, skyline, skyline-refactor, incremental, auto, pgs).
@@ -80,6 +83,7 @@ impl Op {
             Op::RunUntil { sim_time } => msgs::ControlCommand::RunUntil { sim_time: *sim_time },
             Op::Snapshot { path } => msgs::ControlCommand::Snapshot { path: path.clone() },
             Op::Restore { path } => msgs::ControlCommand::Restore { path: path.clone() },
+            Op::Keyframe => msgs::ControlCommand::Keyframe,
             Op::Reset => msgs::ControlCommand::Reset,
             Op::Variant { name } => msgs::ControlCommand::SetVariant {
                 variant: msgs::SolverVariant::from_name(name).ok_or_else(|| {

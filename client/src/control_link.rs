@@ -42,7 +42,14 @@ impl IoxControl {
     /// Opens (or creates) the world's control service and a client port, then waits at most
     /// `timeout` for a server (the pivotsim server of the world on this host) to serve it.
     pub fn open(world: &msgs::WorldName, timeout: Duration) -> Result<IoxControl> {
-        let node = link::node("pivotsim-client")?;
+        IoxControl::open_as(world, "pivotsim-client", timeout)
+    }
+
+    /// [`IoxControl::open`] with a node named `node_name`: a lockstep controller names its node
+    /// with its controller token (`pivotsim/<world>/controller/<id>`), by which the server tells
+    /// that it is there and when it goes.
+    pub fn open_as(world: &msgs::WorldName, node_name: &str, timeout: Duration) -> Result<IoxControl> {
+        let node = link::node(node_name)?;
         let service = link::open_control_service(&node, &link::control_service_name(world))?;
         let client = service
             .client_builder()

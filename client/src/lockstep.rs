@@ -13,8 +13,8 @@
 //! The server takes the step only when asked, so the controller may take as long as it likes
 //! between steps and the simulation never runs ahead of it; inputs sent before a `step` request
 //! apply from that step (`msgs/README.md`, "Lockstep"). Over Zenoh the controller holds the
-//! liveliness token `pivotsim/<world>/controller/<id>` while it runs (`<id>` its input source id),
-//! so the server can tell when it disappears. Over iceoryx2 (same host) the requests go to the
+//! liveliness token `pivotsim/<world>/controller/c<id>` while it runs (`<id>` its input source
+//! id), and over iceoryx2 its node bears that name, so the server can tell when it disappears. Over iceoryx2 (same host) the requests go to the
 //! world's request-response service `pivotsim/<world>/control`, inputs to `…/cmd`, and the pose
 //! frames are read from `…/poses` right after the reply, without a thread in between.
 //!
@@ -237,9 +237,12 @@ impl std::fmt::Debug for Rig {
     }
 }
 
-/// The liveliness token of a lockstep controller: `pivotsim/<world>/controller/<id>`.
-pub fn controller_token(world: &msgs::WorldName, id: u32) -> String {
-    format!("{}/{}/controller/{id}", msgs::KEY_PREFIX, world.as_str())
+/// The controller's token, `pivotsim/<world>/controller/c<source>`: its Zenoh liveliness token,
+/// and over iceoryx2 its node's name.
+fn controller_token(world: &msgs::WorldName, source: u32) -> Result<String> {
+    let id =
+        msgs::WorldName::new(format!("c{source}")).map_err(|e| anyhow!("controller id c{source}: {e}"))?;
+    Ok(world.controller_token(&id))
 }
 
 impl Rig {
@@ -258,13 +261,13 @@ impl Rig {
                 let token = link
                     .session()
                     .liveliness()
-                    .declare_token(controller_token(&world, source))
+                    .declare_token(controller_token(&world, source)?)
                     .wait()
                     .map_err(|e| anyhow!("zenoh: cannot declare the controller's liveliness token: {e}"))?;
                 Ok(Rig::Zenoh { link, poses, input, _token: token })
             }
             TransportKind::Iceoryx2 => {
-                let control = IoxControl::open(&world, timeout)?;
+                let control = IoxControl::open_as(&world, &controller_token(&world, source)?, timeout)?;
                 let name = pivotsim_link::iox::service_name(&world, Topic::Poses)?;
                 let service = pivotsim_link::iox::open_service(control.node(), &name)?;
                 let poses = service

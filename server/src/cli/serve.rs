@@ -90,7 +90,7 @@ pub struct ServeArgs {
     #[arg(long, value_name = "S", default_value_t = pivotsim_server::serve::journal::DEFAULT_KEYFRAME_EVERY, value_parser = values::non_negative_finite)]
     pub keyframes: f64,
     /// What the server does when the last lockstep controller (a Zenoh liveliness token on
-    /// `pivotsim/<world>/controller/<id>`) disappears: `pause` (stay paused, the default) or
+    /// `pivotsim/<world>/controller/<id>`, or an iceoryx2 node of that name) disappears: `pause` (stay paused, the default) or
     /// `resume` (real time goes on). Either way an event `controller-lost` says so.
     #[arg(long, value_name = "WHAT", default_value = "pause", value_parser = ["pause", "resume"])]
     pub on_controller_lost: String,

@@ -21,15 +21,26 @@
 //! client went away (its pending response dropped, or the process died) is dropped at the next
 //! poll, and its reply, when the loop produces it, finds nobody and is discarded.
 //!
+//! **Controllers.** A lockstep controller on this host names its iceoryx2 node with its controller
+//! token, `pivotsim/<world>/controller/<id>` (the Zenoh liveliness key). Every
+//! [`CONTROLLER_SCAN`] the transport lists this host's nodes ([`ControllerWatch`]): a node with
+//! such a name that appears is a controller that joined, one that is gone — it exited, or its
+//! process died (iceoryx2 tells a dead node by its released monitoring lock; the scan also removes
+//! the dead node's stale resources) — a controller lost; both reach the loop as
+//! [`Inbound::Controller`].
+//!
 //! The server's publishers discard a sample for a subscriber whose buffer is full (a stalled
 //! subscriber loses frames, the loop never waits); safe overflow keeps the newest frames. On
 //! start, the resources of dead nodes (a server or client killed with SIGKILL) are removed; on
 //! drop (Ctrl-C, end of run) the node releases everything it created. Subscribers and input
 //! publishers open the services with default settings (`open_or_create`).
 
+use std::collections::BTreeSet;
 use std::sync::mpsc::{Receiver, SyncSender, TrySendError, sync_channel};
+use std::time::{Duration, Instant};
 
 use iceoryx2::active_request::ActiveRequest;
+use iceoryx2::node::{NodeDetails, NodeView};
 use iceoryx2::port::publisher::Publisher;
 use iceoryx2::port::server::Server;
 use iceoryx2::port::subscriber::Subscriber;
@@ -51,6 +62,9 @@ const MAX_INPUTS_PER_POLL: usize = 256;
 pub const MAX_PENDING_CONTROL: usize = 32;
 /// Control requests received per poll.
 const MAX_CONTROL_PER_POLL: usize = 16;
+/// How often the transport lists this host's nodes for lockstep controllers (a killed controller
+/// is seen within this, well inside the 1 s the rig needs).
+pub const CONTROLLER_SCAN: Duration = Duration::from_millis(200);
 
 fn err(e: impl std::fmt::Display) -> ServeError {
     ServeError::Transport { transport: "iceoryx2", message: e.to_string() }
@@ -176,6 +190,75 @@ impl Control {
     }
 }
 
+/// The lockstep controllers of one world on this host: iceoryx2 nodes named
+/// `pivotsim/<world>/controller/<id>`.
+struct ControllerWatch {
+    /// `pivotsim/<world>/controller/`.
+    prefix: String,
+    present: BTreeSet<String>,
+    seen: BTreeSet<String>,
+    next: Instant,
+    throttle: ErrorThrottle,
+}
+
+impl ControllerWatch {
+    fn new(world: &msgs::WorldName) -> ControllerWatch {
+        let any = world.controller_tokens();
+        ControllerWatch {
+            prefix: any.trim_end_matches('*').to_string(),
+            present: BTreeSet::new(),
+            seen: BTreeSet::new(),
+            next: Instant::now(),
+            throttle: ErrorThrottle::default(),
+        }
+    }
+
+    /// At most every [`CONTROLLER_SCAN`]: lists the nodes, cleans dead controllers' resources and
+    /// tells the loop which controllers joined and which went away.
+    fn poll(&mut self, inbox: &InboxSender) {
+        let now = Instant::now();
+        if now < self.next {
+            return;
+        }
+        self.next = now + CONTROLLER_SCAN;
+        self.seen.clear();
+        let (prefix, seen) = (&self.prefix, &mut self.seen);
+        let id_of = |details: &Option<NodeDetails>| {
+            details.as_ref().and_then(|d| d.name().as_str().strip_prefix(prefix.as_str()).map(String::from))
+        };
+        let listed = Node::<ipc::Service>::list(Config::global_config(), |state| {
+            match state {
+                NodeState::Alive(view) => {
+                    if let Some(id) = id_of(view.details()) {
+                        seen.insert(id);
+                    }
+                }
+                NodeState::Dead(view) => {
+                    if id_of(view.details()).is_some()
+                        && let Err(e) = view.try_remove_stale_resources()
+                    {
+                        warn!("iceoryx2: cannot clean a dead controller's resources: {e:?}");
+                    }
+                }
+                NodeState::Inaccessible(_) | NodeState::Undefined(_) => {}
+            }
+            CallbackProgression::Continue
+        });
+        if let Err(e) = listed {
+            // Cannot tell: keep the controllers known, try again at the next scan.
+            self.throttle.fail("iceoryx2 node list", &format!("{e:?}"));
+            return;
+        }
+        for id in self.present.difference(&self.seen) {
+            inbox.offer(Inbound::Controller { id: id.clone(), present: false });
+        }
+        for id in self.seen.difference(&self.present) {
+            inbox.offer(Inbound::Controller { id: id.clone(), present: true });
+        }
+        std::mem::swap(&mut self.present, &mut self.seen);
+    }
+}
+
 /// Sends `bytes` as the response to `request`.
 fn respond(request: &ControlRequest, bytes: &[u8]) -> Result<(), String> {
     let response = request.loan_slice_uninit(bytes.len()).map_err(|e| format!("{e:?}"))?;
@@ -197,6 +280,7 @@ pub struct IoxTransport {
     throttle: ErrorThrottle,
     prefix: String,
     control: Control,
+    controllers: ControllerWatch,
     // Declared last: dropped after the ports and services.
     _node: Node<ipc::Service>,
 }
@@ -265,6 +349,7 @@ impl IoxTransport {
             throttle: ErrorThrottle::default(),
             prefix: format!("{}/{}", msgs::KEY_PREFIX, world.as_str()),
             control,
+            controllers: ControllerWatch::new(world),
             _node: node,
         })
     }
@@ -309,6 +394,7 @@ impl Transport for IoxTransport {
         }
         // After the inputs: an input sent before a request reaches the loop first.
         self.control.poll(inbox);
+        self.controllers.poll(inbox);
     }
 
     fn flush(&mut self) {

@@ -56,7 +56,7 @@ use std::time::{Duration, Instant};
 use pivotsim_msgs as msgs;
 use tracing::info;
 
-pub use config::{MAX_DEADMAN_MS, MAX_STEP_PERIOD, ServeConfig, ServeError, ZenohOptions};
+pub use config::{ControllerLost, MAX_DEADMAN_MS, MAX_STEP_PERIOD, ServeConfig, ServeError, ZenohOptions};
 pub use engine::Engine;
 pub use pacing::{MAX_CATCH_UP, step_period};
 pub use transport::{ErrorThrottle, Frames, INBOX_CAPACITY, Inbound, InboxSender, Transport, inbox};

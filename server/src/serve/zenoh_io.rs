@@ -6,6 +6,12 @@
 //! answered by the loop thread). With access control in the Zenoh configuration, the puts its
 //! rules refuse are counted too (`zenoh_refused.rs`).
 //!
+//! Lockstep controllers hold the liveliness token `pivotsim/<world>/controller/<id>` while they
+//! run; a liveliness subscriber (with history, so controllers already there count) turns each
+//! token's appearance and disappearance into [`Inbound::Controller`]. Zenoh undeclares the token
+//! of a controller that exits, is killed or whose link closes (the peer's TCP connection ends);
+//! one whose host vanishes without closing the link goes when the session lease expires.
+//!
 //! Events (thresholds raised and cleared, faults, refused faults) are not frames: each is sent
 //! once, and a lost one is lost for good. With *drop*, the events frame — the fourth message of a
 //! step's burst, on the same priority queue as the three frames before it — was the one Zenoh
@@ -161,6 +167,7 @@ pub struct ZenohTransport {
     _inputs: Subscriber<()>,
     _scene: Queryable<()>,
     _control: Queryable<()>,
+    _controllers: Subscriber<()>,
     _token: LivelinessToken,
     description: Arc<RwLock<Vec<u8>>>,
     throttle: ErrorThrottle,
@@ -242,6 +249,21 @@ impl ZenohTransport {
             })
             .wait()
             .map_err(err)?;
+        let tx = inbox.clone();
+        let controllers = session
+            .liveliness()
+            .declare_subscriber(world.controller_tokens())
+            .history(true)
+            .callback(move |sample| {
+                let key = sample.key_expr().as_str();
+                let id = key.rsplit('/').next().unwrap_or_default().to_string();
+                let present = sample.kind() == zenoh::sample::SampleKind::Put;
+                if !tx.offer(Inbound::Controller { id, present }) {
+                    tracing::warn!("zenoh: controller token {key} changed with the inbox full (not seen)");
+                }
+            })
+            .wait()
+            .map_err(err)?;
         let control_key = world.key(msgs::Topic::Control);
         let control = session
             .declare_queryable(control_key.clone())
@@ -271,6 +293,7 @@ impl ZenohTransport {
             _inputs: inputs,
             _scene: scene,
             _control: control,
+            _controllers: controllers,
             _token: token,
             description,
             throttle: ErrorThrottle::default(),
