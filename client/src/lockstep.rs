@@ -446,7 +446,7 @@ fn closed_loop(rig: &mut Rig, plan: &Plan, args: &Args, source: u32, timeout: Du
             sequence: base + done,
             source_id: source,
             mode: plan.mode,
-            actuator: plan.actuator.clone(),
+            actuator: plan.actuator,
             value: command,
         });
         input.encode(&mut buf).map_err(|e| anyhow!("input: {e}"))?;
