@@ -741,12 +741,15 @@ pub fn contact_markers(
     MarkerArray { markers }
 }
 
-/// The `/rosout` level of an event: a threshold raised, a fault or a refused fault WARN, a
-/// threshold cleared INFO.
+/// The `/rosout` level of an event: a threshold raised, a fault, a refused fault or a lost
+/// controller WARN, a threshold cleared or a controller joining INFO.
 pub fn event_level(kind: msgs::EventCode) -> u8 {
     match kind {
-        msgs::EventCode::Cleared => Log::INFO,
-        msgs::EventCode::Raised | msgs::EventCode::Fault | msgs::EventCode::FaultRejected => Log::WARN,
+        msgs::EventCode::Cleared | msgs::EventCode::ControllerJoined => Log::INFO,
+        msgs::EventCode::Raised
+        | msgs::EventCode::Fault
+        | msgs::EventCode::FaultRejected
+        | msgs::EventCode::ControllerLost => Log::WARN,
     }
 }
 

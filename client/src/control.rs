@@ -1,5 +1,7 @@
-//! `control`: one control request on the `control` queryable; prints the reply and exits non-zero
-//! when the server refused or failed.
+//! `control`: one control request on the world's `control` queryable (Zenoh) or request-response
+//! service (`--transport iceoryx2`, same host); prints the reply — after a lockstep request
+//! (`step`, `run-until`) also the steps taken and how their island solves ended — and exits
+//! non-zero when the server refused or failed.
 
 use std::process::ExitCode;
 
@@ -7,6 +9,8 @@ use anyhow::{Result, anyhow};
 use pivotsim_msgs as msgs;
 
 use crate::common::Common;
+use crate::control_link::ControlLink;
+use crate::net::TransportKind;
 
 /// `control` options.
 #[derive(Debug, clap::Args)]
@@ -16,6 +20,10 @@ pub struct Args {
     /// Print the reply as JSON.
     #[arg(long)]
     pub json: bool,
+    /// Transport of the request: the Zenoh queryable, or the iceoryx2 request-response service
+    /// (same host).
+    #[arg(long, value_enum, default_value = "zenoh")]
+    pub transport: TransportKind,
 }
 
 /// The request.
@@ -30,6 +38,26 @@ pub enum Op {
         /// Steps.
         count: u32,
     },
+    /// Advance a paused world to the step nearest a simulation time (s), publishing every step.
+    #[command(allow_negative_numbers = true)]
+    RunUntil {
+        /// Simulation time (s).
+        sim_time: f64,
+    },
+    /// Write the world's complete state to a file in the server's snapshot directory
+    /// (`serve --snapshot-dir`).
+    Snapshot {
+        /// File name relative to the server's snapshot directory.
+        path: String,
+    },
+    /// Put back the state of a snapshot file of the running scene (paused, new sequence).
+    Restore {
+        /// File name relative to the server's snapshot directory.
+        path: String,
+    },
+    /// Publish a keyframe (a snapshot on `keyframes`) of the current state with the next frames,
+    /// for a recorder that starts mid-session.
+    Keyframe,
     /// Restart the current scene, paused at time 0.
     Reset,
     /// Switch the solver variant (full, downdate, skyline, skyline-refactor, incremental, auto, pgs).
@@ -52,6 +80,10 @@ impl Op {
             Op::Pause => msgs::ControlCommand::Pause,
             Op::Resume => msgs::ControlCommand::Resume,
             Op::Step { count } => msgs::ControlCommand::Step { count: *count },
+            Op::RunUntil { sim_time } => msgs::ControlCommand::RunUntil { sim_time: *sim_time },
+            Op::Snapshot { path } => msgs::ControlCommand::Snapshot { path: path.clone() },
+            Op::Restore { path } => msgs::ControlCommand::Restore { path: path.clone() },
+            Op::Keyframe => msgs::ControlCommand::Keyframe,
             Op::Reset => msgs::ControlCommand::Reset,
             Op::Variant { name } => msgs::ControlCommand::SetVariant {
                 variant: msgs::SolverVariant::from_name(name).ok_or_else(|| {
@@ -65,17 +97,31 @@ impl Op {
 
 /// Runs `control`.
 pub fn run(common: &Common, args: &Args) -> Result<ExitCode> {
-    request(common, args.op.command()?, args.json)
+    request_on(common, args.transport, args.op.command()?, args.json)
 }
 
-/// Sends one control request, prints the reply; exit code 2 when the server refused it.
+/// Sends one control request over Zenoh, prints the reply; exit code 2 when the server refused it.
 pub fn request(common: &Common, command: msgs::ControlCommand, json: bool) -> Result<ExitCode> {
-    // Ids below 2^53 (JavaScript clients read them exactly).
-    let id = crate::net::now_ns() & ((1u64 << 53) - 1);
+    request_on(common, TransportKind::Zenoh, command, json)
+}
+
+/// A fresh request id: below 2^53 (JavaScript clients read them exactly), never 0.
+pub fn fresh_id() -> u64 {
+    (crate::net::now_ns() & ((1u64 << 53) - 1)).max(1)
+}
+
+/// [`request`] over `transport`.
+pub fn request_on(
+    common: &Common,
+    transport: TransportKind,
+    command: msgs::ControlCommand,
+    json: bool,
+) -> Result<ExitCode> {
+    let id = fresh_id();
     let req = msgs::ControlRequest { id, command };
     req.validate().map_err(|e| anyhow!("invalid request: {e}"))?;
-    let link = common.open_zenoh()?;
-    let reply = link.control(&req, common.timeout_or(5.0))?;
+    let mut link = ControlLink::open(common, transport)?;
+    let reply = link.request(&req, common.timeout_or(5.0))?;
     if json {
         println!("{}", serde_json::to_string(&reply)?);
     }
@@ -93,6 +139,9 @@ pub fn request(common: &Common, command: msgs::ControlCommand, json: bool) -> Re
                     s.sim_time,
                     s.variant.name()
                 );
+                if let Some(r) = s.steps {
+                    println!("{}", steps_line(&r));
+                }
             }
             Ok(ExitCode::SUCCESS)
         }
@@ -102,4 +151,12 @@ pub fn request(common: &Common, command: msgs::ControlCommand, json: bool) -> Re
             Ok(ExitCode::from(2))
         }
     }
+}
+
+/// One line on a lockstep request's steps.
+pub fn steps_line(r: &msgs::StepReport) -> String {
+    format!(
+        "steps: {} taken  island solves {}  not converged {}  max residual {:.3e}",
+        r.count, r.island_solves, r.not_converged, r.max_residual_rel
+    )
 }

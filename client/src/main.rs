@@ -6,11 +6,12 @@
 //! | `drive` | keyboard or gamepad → joystick frames at 30–60 Hz | zenoh, iceoryx2 |
 //! | `send` | one winch, actuator, boom or joystick command | zenoh, iceoryx2 |
 //! | `scene` | the scene description (summary or JSON) | zenoh |
-//! | `control` | pause, resume, step, reset, solver variant, load scene | zenoh |
+//! | `control` | pause, resume, step, run until, snapshot, restore, reset, solver variant, load scene | zenoh, iceoryx2 |
 //! | `fault` | inject a fault (rope break, hose burst, brake fade, sticking valve, sensor dropout) | zenoh |
 //! | `record` | poses, stats and inputs into an MCAP file Foxglove opens | zenoh, iceoryx2 |
 //! | `foxglove` | the world live in Foxglove (WebSocket on 127.0.0.1:8765): shapes, transforms, stats | zenoh, iceoryx2 |
 //! | `ping` | pose latency publish → receive, percentiles and histogram | zenoh, iceoryx2 |
+//! | `lockstep` | a controller in the loop: step, read the pose, send the next input; round trips per second | zenoh, iceoryx2 |
 //!
 //! Everything stays on loopback unless told otherwise: Zenoh connects to `tcp/127.0.0.1:7447` as a
 //! peer that listens on nothing, with multicast scouting off; iceoryx2 is same-host by nature.
@@ -19,11 +20,13 @@
 
 mod common;
 mod control;
+mod control_link;
 mod drive;
 mod fault;
 mod fox;
 mod foxglove_live;
 mod keymap;
+mod lockstep;
 mod net;
 mod ping;
 mod record;
@@ -59,7 +62,8 @@ enum Command {
     Send(send::Args),
     /// Print the scene description.
     Scene(scene::Args),
-    /// Pause, resume, step, reset, switch the solver variant or load a scene.
+    /// Pause, resume, step, run until a time, snapshot, restore, reset, switch the solver variant
+    /// or load a scene.
     Control(control::Args),
     /// Inject a fault (instructor station): break, hose_burst, brake_fade, stick_valve, dropout.
     Fault(fault::Args),
@@ -67,6 +71,9 @@ enum Command {
     Record(record::Args),
     /// Pose latency, server publish → client receive.
     Ping(ping::Args),
+    /// A controller in the loop (lockstep): step, read that step's pose, send the next input;
+    /// reports round trips per second.
+    Lockstep(lockstep::Args),
     /// Serve the world live to Foxglove (WebSocket protocol, ws://127.0.0.1:8765 by default).
     Foxglove(foxglove_live::Args),
 }
@@ -85,6 +92,7 @@ fn main() -> std::process::ExitCode {
         Command::Fault(a) => fault::run(&cli.common, a),
         Command::Record(a) => record::run(&cli.common, a),
         Command::Ping(a) => ping::run(&cli.common, a),
+        Command::Lockstep(a) => lockstep::run(&cli.common, a),
         Command::Foxglove(a) => foxglove_live::run(&cli.common, a),
     };
     match r {

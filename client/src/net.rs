@@ -113,6 +113,11 @@ impl std::fmt::Debug for ZenohLink {
 }
 
 impl ZenohLink {
+    /// The session (for declarations of its own: a controller's liveliness token).
+    pub fn session(&self) -> &zenoh::Session {
+        &self.session
+    }
+
     /// Opens the session and waits (at most `timeout`) until it is connected to at least one peer.
     pub fn open(opts: &ZenohOptions, world: &WorldName, timeout: Duration) -> Result<ZenohLink> {
         let session = zenoh::open(zenoh_config(opts)?)

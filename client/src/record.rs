@@ -16,6 +16,14 @@
 //! | `/pivotsim/contact_forces` | `foxglove.SceneUpdate` (protobuf) | every signals frame: the contact forces as arrows (the largest 0.5 m long) |
 //! | `/pivotsim/events` | `pivotsim.Events` (json) | every events frame: name, kind, time, value, level per event |
 //! | `/pivotsim/cmd/joystick` … `cmd/actuator` | `pivotsim.Joystick` … (json) | inputs, as seen (channel added at the first one) |
+//! | `/pivotsim/wire/poses` | none, encoding `pivotsim-wire` | every pose frame byte for byte (for `pivotsim-server replay` to compare) |
+//! | `/pivotsim/wire/applied` | none, encoding `pivotsim-wire` | the server's applied frames (Zenoh): what changed the world before each step |
+//! | `/pivotsim/wire/keyframes` | none, encoding `pivotsim-wire` | the server's keyframes (Zenoh): snapshots every few seconds and at new scene states |
+//!
+//! **Replay.** The last three channels are the wire frames as published (`msgs/README.md`,
+//! "Journal"); `pivotsim-server replay FILE.mcap` reproduces the session from them bit for bit.
+//! Over Zenoh the recorder asks the server for a keyframe when it starts (control op `keyframe`),
+//! so the replay can start at the recording's beginning; over iceoryx2 there is no journal.
 //!
 //! Faults sent live (`pivotsim-client fault`) are in the recording as `fault` events with their
 //! sim time, and their effect (a dropout, a parted rope's tension) in the signals: a recording
@@ -78,11 +86,19 @@ struct Channels {
     events: u16,
     inputs: Vec<(Topic, u16)>,
     input_seq: u32,
+    wire_poses: u16,
+    wire_applied: u16,
+    wire_keyframes: u16,
 }
 
 fn add_channel(w: &mut McapWriter, spec: &ChannelSpec) -> Result<u16> {
     let schema_id = w.add_schema(&spec.schema.name, &spec.schema.encoding, &spec.schema.data)?;
     Ok(w.add_channel(schema_id, &spec.topic, &spec.encoding, &BTreeMap::new())?)
+}
+
+/// A channel of wire frames, byte for byte (no schema: `msgs/README.md` is theirs).
+fn wire_channel(w: &mut McapWriter, topic: &str) -> Result<u16> {
+    Ok(w.add_channel(0, topic, msgs::RECORD_WIRE_ENCODING, &BTreeMap::new())?)
 }
 
 fn write(w: &mut McapWriter, channel: u16, seq: u32, log: u64, publish: u64, data: &[u8]) -> Result<()> {
@@ -139,6 +155,9 @@ fn open_file(
         events: add_channel(&mut w, &topics::events())?,
         inputs: Vec::new(),
         input_seq: 0,
+        wire_poses: wire_channel(&mut w, msgs::RECORD_TOPIC_POSES)?,
+        wire_applied: wire_channel(&mut w, msgs::RECORD_TOPIC_APPLIED)?,
+        wire_keyframes: wire_channel(&mut w, msgs::RECORD_TOPIC_KEYFRAMES)?,
     };
     if !args.no_tf {
         ch.tf = Some(add_channel(&mut w, &topics::tf())?);
@@ -162,6 +181,8 @@ struct Counts {
     signals: u64,
     events: u64,
     inputs: u64,
+    applied: u64,
+    keyframes: u64,
     malformed: u64,
 }
 
@@ -180,6 +201,7 @@ impl Recorder<'_> {
         let seq = v.sequence() as u32;
         let json = tojson::pose_json(&v, self.scene, |_| true);
         write_json(&mut self.w, self.ch.poses, seq, r.recv_ns, v.wall_time_ns(), &json)?;
+        write(&mut self.w, self.ch.wire_poses, seq, r.recv_ns, v.wall_time_ns(), &r.bytes)?;
         if let Some(tf) = self.ch.tf {
             let tfs = topics::encode(&frames::frame_transforms(&v, self.scene));
             write(&mut self.w, tf, seq, r.recv_ns, v.wall_time_ns(), &tfs)?;
@@ -218,6 +240,26 @@ impl Recorder<'_> {
         Ok(true)
     }
 
+    /// An applied frame or a keyframe of the server's journal, as it came.
+    fn journal(&mut self, r: &Received, keyframe: bool) -> Result<bool> {
+        let (channel, seq) = match keyframe {
+            true => match msgs::KeyframeView::parse(&r.bytes) {
+                Ok(k) => (self.ch.wire_keyframes, k.sequence),
+                Err(_) => return Ok(false),
+            },
+            false => match msgs::AppliedFrame::decode(&r.bytes) {
+                Ok(a) => (self.ch.wire_applied, a.sequence),
+                Err(_) => return Ok(false),
+            },
+        };
+        write(&mut self.w, channel, seq as u32, r.recv_ns, r.recv_ns, &r.bytes)?;
+        match keyframe {
+            true => self.n.keyframes += 1,
+            false => self.n.applied += 1,
+        }
+        Ok(true)
+    }
+
     /// An input, on its topic's channel (added at its first message).
     fn input(&mut self, r: &Received) -> Result<bool> {
         let Ok(c) = msgs::InputCommand::decode(&r.bytes) else { return Ok(false) };
@@ -243,6 +285,8 @@ impl Recorder<'_> {
             Some(Topic::Stats) => (true, self.stats(r)?),
             Some(Topic::Signals) => (true, self.signals(r)?),
             Some(Topic::Events) => (true, self.events(r)?),
+            Some(Topic::Applied) => (true, self.journal(r, false)?),
+            Some(Topic::Keyframes) => (true, self.journal(r, true)?),
             Some(t) if Topic::INPUTS.contains(&t) => (false, self.input(r)?),
             _ => (false, false),
         };
@@ -257,7 +301,7 @@ impl Recorder<'_> {
 /// Ctrl-C or a silence longer than `--timeout`.
 pub fn run(common: &Common, args: &Args) -> Result<ExitCode> {
     let world = common.world()?;
-    let topics = [
+    let mut topics = vec![
         Topic::Poses,
         Topic::Stats,
         Topic::Signals,
@@ -267,6 +311,9 @@ pub fn run(common: &Common, args: &Args) -> Result<ExitCode> {
         Topic::Boom,
         Topic::Actuator,
     ];
+    if matches!(args.transport, TransportKind::Zenoh) {
+        topics.extend([Topic::Applied, Topic::Keyframes]);
+    }
     let stream =
         Stream::open(&common.server()?, args.transport, &topics, 8192, Duration::from_micros(500), None)?;
     let scene = crate::util::scene_best_effort(common, stream.zenoh(), common.timeout_or(2.0));
@@ -274,6 +321,19 @@ pub fn run(common: &Common, args: &Args) -> Result<ExitCode> {
         eprintln!("pivotsim-client: no scene description: bodies named by id, no scene channel");
     }
     let (w, ch) = open_file(args, &world, scene.as_ref())?;
+    // A keyframe of the state now: the replay's starting point (best effort: an older server, or
+    // one that does not answer, leaves the recording to the next periodic keyframe).
+    if let Some(z) = stream.zenoh() {
+        let req = msgs::ControlRequest {
+            id: u64::from(crate::util::random_u32()),
+            command: msgs::ControlCommand::Keyframe,
+        };
+        match z.control(&req, common.timeout_or(2.0)) {
+            Ok(r) if matches!(r.outcome, msgs::ControlOutcome::Ok(_)) => {}
+            Ok(r) => eprintln!("pivotsim-client: the server refused a keyframe: {:?}", r.outcome),
+            Err(e) => eprintln!("pivotsim-client: no keyframe requested: {e:#}"),
+        }
+    }
     let mut rec = Recorder { w, ch, scene: scene.as_ref(), n: Counts::default() };
     let end = args.duration.map(|d| Instant::now() + secs(d));
     let idle = common.timeout.map(secs);
@@ -328,13 +388,15 @@ pub fn run(common: &Common, args: &Args) -> Result<ExitCode> {
     }
     let n = &rec.n;
     eprintln!(
-        "pivotsim-client: wrote {}: {} pose frames, {} stats, {} signals, {} events, {} inputs in {:.1} s ({} malformed skipped, {} dropped)",
+        "pivotsim-client: wrote {}: {} pose frames, {} stats, {} signals, {} events, {} inputs, {} applied, {} keyframes in {:.1} s ({} malformed skipped, {} dropped)",
         args.file.display(),
         n.poses,
         n.stats,
         n.signals,
         n.events,
         n.inputs,
+        n.applied,
+        n.keyframes,
         start.elapsed().as_secs_f64(),
         n.malformed,
         stream.inbox.dropped()

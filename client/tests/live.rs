@@ -215,6 +215,12 @@ fn read_mcap(path: &std::path::Path) -> std::collections::BTreeMap<String, Recor
     let mut out: std::collections::BTreeMap<String, Recorded> = std::collections::BTreeMap::new();
     for m in mcap::MessageStream::new(&bytes).unwrap() {
         let m = m.unwrap();
+        // The wire channels (for `pivotsim-server replay`) carry frames byte for byte, no schema.
+        if m.channel.message_encoding == pivotsim_msgs::RECORD_WIRE_ENCODING {
+            assert!(m.channel.schema.is_none(), "{}", m.channel.topic);
+            pivotsim_msgs::Message::decode(&m.data).expect("a wire frame");
+            continue;
+        }
         let schema = m.channel.schema.as_ref().expect("schema");
         assert!(!schema.data.is_empty(), "{}: empty schema", m.channel.topic);
         match m.channel.message_encoding.as_str() {
@@ -235,6 +241,9 @@ fn read_mcap(path: &std::path::Path) -> std::collections::BTreeMap<String, Recor
     let summary = mcap::Summary::read(&bytes).unwrap().expect("summary");
     let stats = summary.stats.as_ref().expect("statistics");
     for (id, ch) in &summary.channels {
+        if ch.message_encoding == pivotsim_msgs::RECORD_WIRE_ENCODING {
+            continue;
+        }
         // A channel may hold no message (a topic that published nothing while recording).
         let counted = stats.channel_message_counts.get(id).copied().unwrap_or(0);
         let read = out.get(&ch.topic).map_or(0, |r| r.messages.len());

@@ -3,6 +3,7 @@
 //! handed back to the caller and counted as dropped, so a burst of frames can never stall a
 //! transport thread or grow memory without bound.
 
+use std::cell::RefCell;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::mpsc::{Receiver, SyncSender, TrySendError, sync_channel};
@@ -39,10 +40,12 @@ impl<T> InboxSender<T> {
     }
 }
 
-/// The taking side.
+/// The taking side (one thread: the loop).
 pub struct Inbox<T> {
     rx: Receiver<T>,
     dropped: Arc<AtomicU64>,
+    /// An item [`Inbox::wait`] took and the next take returns.
+    held: RefCell<Option<T>>,
 }
 
 impl<T> std::fmt::Debug for Inbox<T> {
@@ -54,12 +57,22 @@ impl<T> std::fmt::Debug for Inbox<T> {
 impl<T> Inbox<T> {
     /// The next item, waiting at most `timeout` (`None` on timeout or when every sender is gone).
     pub fn recv_timeout(&self, timeout: Duration) -> Option<T> {
-        self.rx.recv_timeout(timeout).ok()
+        self.held.borrow_mut().take().or_else(|| self.rx.recv_timeout(timeout).ok())
     }
 
     /// An item if one is waiting.
     pub fn try_recv(&self) -> Option<T> {
-        self.rx.try_recv().ok()
+        self.held.borrow_mut().take().or_else(|| self.rx.try_recv().ok())
+    }
+
+    /// Waits at most `timeout` for an item without taking it (the next take returns it); whether
+    /// one is waiting. A loop that sleeps between turns waits here, so an item wakes it at once.
+    pub fn wait(&self, timeout: Duration) -> bool {
+        let mut held = self.held.borrow_mut();
+        if held.is_none() {
+            *held = self.rx.recv_timeout(timeout).ok();
+        }
+        held.is_some()
     }
 
     /// Items dropped so far because the inbox was full.
@@ -72,7 +85,7 @@ impl<T> Inbox<T> {
 pub fn inbox<T>(capacity: usize) -> (InboxSender<T>, Inbox<T>) {
     let (tx, rx) = sync_channel(capacity.max(1));
     let dropped = Arc::new(AtomicU64::new(0));
-    (InboxSender { tx, dropped: dropped.clone() }, Inbox { rx, dropped })
+    (InboxSender { tx, dropped: dropped.clone() }, Inbox { rx, dropped, held: RefCell::new(None) })
 }
 
 #[cfg(test)]
@@ -91,5 +104,25 @@ mod tests {
         assert_eq!(rx.try_recv(), None);
         drop(rx);
         assert_eq!(tx.offer(4), Err(4));
+    }
+
+    #[test]
+    fn waiting_keeps_the_item_for_the_next_take_in_order() {
+        let (tx, rx) = inbox::<u32>(4);
+        assert!(!rx.wait(Duration::from_millis(1)));
+        let sender = std::thread::spawn(move || {
+            std::thread::sleep(Duration::from_millis(20));
+            tx.offer(7).unwrap();
+            tx.offer(8).unwrap();
+        });
+        // Woken by the item, long before the timeout.
+        let t0 = std::time::Instant::now();
+        assert!(rx.wait(Duration::from_secs(10)));
+        assert!(t0.elapsed() < Duration::from_secs(5));
+        assert!(rx.wait(Duration::ZERO), "a held item is still waiting");
+        sender.join().unwrap();
+        assert_eq!(rx.try_recv(), Some(7));
+        assert_eq!(rx.recv_timeout(Duration::from_millis(1)), Some(8));
+        assert_eq!(rx.try_recv(), None);
     }
 }

@@ -8,13 +8,26 @@
 //! {"id":11,"command":{"op":"set_variant","variant":"skyline"}}
 //! {"id":12,"command":{"op":"load_scene","scene":"winch"}}
 //! {"id":13,"command":{"op":"fault","fault":"break","target":"rope/end","tension":25000.0}}
+//! {"id":14,"command":{"op":"run_until","sim_time":12.5}}
+//! {"id":15,"command":{"op":"snapshot","path":"debrief/t600.snap"}}
+//! {"id":16,"command":{"op":"restore","path":"debrief/t600.snap"}}
 //!
 //! {"id":11,"outcome":{"ok":{"scene":"winch","paused":false,"sequence":420,"sim_time":7.0,"variant":"skyline"}}}
+//! {"id":9,"outcome":{"ok":{"scene":"winch","paused":true,"sequence":421,"sim_time":7.0166,"variant":"skyline",
+//!   "steps":{"count":1,"island_solves":3,"not_converged":0,"max_residual_rel":2.1e-13}}}}
 //! {"id":11,"outcome":{"error":{"code":"unknown_variant","message":"no variant \"fast\""}}}
 //! ```
 //!
 //! `id` is chosen by the client and echoed by the reply. `step` advances a paused world by `count`
-//! steps (1 ..= 3600) and leaves it paused. `set_variant` takes one of the seven solver variant
+//! steps (1 ..= 3600) and leaves it paused; `run_until` advances it to the step nearest
+//! `sim_time` (at most 3600 steps ahead; `in_the_past` when that step is not ahead). Both are the
+//! lockstep requests: every step's frames are published, and the reply is sent after the last
+//! step's, with `steps` (how many were taken and how their island solves ended); on a running
+//! world they are refused `busy`. `snapshot` writes the complete state to a file and `restore`
+//! puts one back (paused, new sequence); both name a file relative to the server's snapshot
+//! directory (`serve --snapshot-dir`; none: refused `load_refused`), 1 ..= 256 bytes, no control
+//! characters, no `..`; `snapshot_failed` when the file cannot be written or read, or is of
+//! another scene or format. `set_variant` takes one of the seven solver variant
 //! names and applies from the next step. `load_scene` takes a built-in scene name or a path inside
 //! the server's scene directories (1 ..= 256 bytes, no control characters) and starts it paused at
 //! time 0, its first frames with a new sequence (last + 1). An `id` that is not a u64 (−1, 2^64)
@@ -70,6 +83,23 @@ pub enum ControlCommand {
         /// Scene name or path.
         scene: String,
     },
+    /// Advance a paused world to the step nearest `sim_time`.
+    RunUntil {
+        /// Target simulation time (s), finite and ≥ 0.
+        sim_time: f64,
+    },
+    /// Write the complete state to a file in the server's snapshot directory.
+    Snapshot {
+        /// File name relative to that directory.
+        path: String,
+    },
+    /// Put back the state of a snapshot file of the running scene (paused, new sequence).
+    Restore {
+        /// File name relative to the server's snapshot directory.
+        path: String,
+    },
+    /// Publish a keyframe of the current state on `keyframes` (a recorder that starts asks so).
+    Keyframe,
     /// Inject a fault (an instructor station): reported as an event of the next step.
     Fault {
         /// What breaks.
@@ -168,6 +198,24 @@ pub struct ServerStatus {
     pub sim_time: f64,
     /// Solver variant in use.
     pub variant: SolverVariant,
+    /// The steps a lockstep request (`step`, `run_until`) took; absent otherwise.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub steps: Option<StepReport>,
+}
+
+/// The steps one lockstep request took and how their island solves ended.
+#[derive(Debug, Clone, Copy, PartialEq, Default, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct StepReport {
+    /// Steps taken (fewer than asked only when a step failed: the world is then paused at its last
+    /// good state and the reply says so in `not_converged` and the server's log).
+    pub count: u32,
+    /// Island solves over those steps.
+    pub island_solves: u32,
+    /// Of them, solves that did not end converged (capped, inexact, fell back).
+    pub not_converged: u32,
+    /// Largest relative natural-map residual of an island solve.
+    pub max_residual_rel: f64,
 }
 
 /// Why a control request failed.
@@ -197,6 +245,11 @@ pub enum ControlErrorCode {
     LoadRefused,
     /// The server cannot do it now (e.g. `step` while running).
     Busy,
+    /// `run_until` a time whose step is not ahead of the world's.
+    InThePast,
+    /// `snapshot` or `restore` failed: the file could not be written or read, or it is of another
+    /// scene or format (the world is unchanged).
+    SnapshotFailed,
     /// A `fault` the scene refused: an unknown target, a target of the wrong kind, a value out of
     /// range (counted as a `fault-rejected` event).
     FaultRejected,
@@ -237,6 +290,14 @@ pub enum ControlError {
     /// Failure message above [`MAX_MESSAGE_LEN`] bytes.
     #[error("message of {len} bytes (at most {MAX_MESSAGE_LEN})")]
     MessageTooLong {
+        /// Length in bytes.
+        len: usize,
+    },
+    /// A snapshot file name that is empty, too long, absolute, has a control character or `..`.
+    #[error(
+        "snapshot path of {len} bytes (1 ..= {MAX_SCENE_REF_LEN}, relative, no control characters, no `..`)"
+    )]
+    SnapshotPath {
         /// Length in bytes.
         len: usize,
     },
@@ -286,6 +347,7 @@ impl ControlError {
             | ControlError::SceneChar { .. }
             | ControlError::MessageTooLong { .. }
             | ControlError::SimTime { .. }
+            | ControlError::SnapshotPath { .. }
             | ControlError::UnknownFault { .. }
             | ControlError::FaultTarget { .. }
             | ControlError::FaultValue { .. }
@@ -305,6 +367,18 @@ pub(crate) fn check_scene_ref(s: &str) -> Result<(), ControlError> {
         Some(index) => Err(ControlError::SceneChar { index }),
         None => Ok(()),
     }
+}
+
+/// A snapshot path: relative, 1 ..= [`MAX_SCENE_REF_LEN`] bytes, no control character, no `..`
+/// component (the server joins it to its snapshot directory).
+pub(crate) fn check_snapshot_path(s: &str) -> Result<(), ControlError> {
+    let bad = s.is_empty()
+        || s.len() > MAX_SCENE_REF_LEN
+        || s.bytes().any(|b| b.is_ascii_control())
+        || s.starts_with('/')
+        || s.starts_with('\\')
+        || s.split(['/', '\\']).any(|c| c == "..");
+    if bad { Err(ControlError::SnapshotPath { len: s.len() }) } else { Ok(()) }
 }
 
 fn variant(name: String) -> Result<SolverVariant, ControlError> {
@@ -338,6 +412,16 @@ mod raw {
         LoadScene {
             scene: String,
         },
+        RunUntil {
+            sim_time: f64,
+        },
+        Snapshot {
+            path: String,
+        },
+        Restore {
+            path: String,
+        },
+        Keyframe {},
         Fault {
             fault: String,
             target: String,
@@ -372,6 +456,8 @@ mod raw {
         pub sequence: u64,
         pub sim_time: f64,
         pub variant: String,
+        #[serde(default)]
+        pub steps: Option<super::StepReport>,
     }
 }
 
@@ -383,6 +469,10 @@ impl ControlRequest {
                 Err(ControlError::StepCount { count: *count })
             }
             ControlCommand::LoadScene { scene } => check_scene_ref(scene),
+            ControlCommand::RunUntil { sim_time } if !(sim_time.is_finite() && *sim_time >= 0.0) => {
+                Err(ControlError::SimTime { value: *sim_time })
+            }
+            ControlCommand::Snapshot { path } | ControlCommand::Restore { path } => check_snapshot_path(path),
             ControlCommand::Fault { target, tension, to, ramp, .. } => {
                 if target.is_empty()
                     || target.len() > MAX_FAULT_TARGET_LEN
@@ -439,6 +529,10 @@ impl ControlRequest {
                 ControlCommand::SetVariant { variant: variant(v).map_err(DecodeError::Invalid)? }
             }
             raw::Command::LoadScene { scene } => ControlCommand::LoadScene { scene },
+            raw::Command::RunUntil { sim_time } => ControlCommand::RunUntil { sim_time },
+            raw::Command::Snapshot { path } => ControlCommand::Snapshot { path },
+            raw::Command::Restore { path } => ControlCommand::Restore { path },
+            raw::Command::Keyframe {} => ControlCommand::Keyframe,
             raw::Command::Fault { fault, target, tension, to, ramp } => ControlCommand::Fault {
                 fault: FaultKind::from_name(&fault)
                     .ok_or(DecodeError::Invalid(ControlError::UnknownFault { name: fault }))?,
@@ -480,6 +574,11 @@ impl ControlReply {
                 if !s.sim_time.is_finite() || s.sim_time < 0.0 {
                     return Err(ControlError::SimTime { value: s.sim_time });
                 }
+                if let Some(r) = s.steps
+                    && !(r.max_residual_rel.is_finite() && r.max_residual_rel >= 0.0)
+                {
+                    return Err(ControlError::SimTime { value: r.max_residual_rel });
+                }
                 check_scene_ref(&s.scene)
             }
             ControlOutcome::Error(f) if f.message.len() > MAX_MESSAGE_LEN => {
@@ -506,6 +605,7 @@ impl ControlReply {
                 sequence: s.sequence,
                 sim_time: s.sim_time,
                 variant: variant(s.variant).map_err(DecodeError::Invalid)?,
+                steps: s.steps,
             }),
             raw::Outcome::Error(f) => ControlOutcome::Error(f),
         };

@@ -3,7 +3,7 @@
 //! ```text
 //! offset size field
 //!      0    4 magic            b"PVSM"
-//!      4    2 version          u16 LE, FORMAT_VERSION (4)
+//!      4    2 version          u16 LE, FORMAT_VERSION (5)
 //!      6    2 kind             u16 LE, Kind code
 //!      8    4 payload_len      u32 LE, bytes after the header
 //!     12    4 flags            u32 LE, reserved: 0 in this version
@@ -20,7 +20,7 @@ use crate::le;
 /// First four bytes of every frame.
 pub const MAGIC: [u8; 4] = *b"PVSM";
 /// Version written by this crate and the only one it decodes.
-pub const FORMAT_VERSION: u16 = 4;
+pub const FORMAT_VERSION: u16 = 5;
 /// Bytes of the header.
 pub const HEADER_LEN: usize = 16;
 /// Largest frame of any kind, header included (16 MiB).
@@ -38,6 +38,10 @@ pub enum Kind {
     Signals = 0x0003,
     /// [`EventsFrame`](crate::EventsFrame), binary.
     Events = 0x0004,
+    /// [`AppliedFrame`](crate::AppliedFrame), binary.
+    Applied = 0x0005,
+    /// [`KeyframeView`](crate::KeyframeView), binary.
+    Keyframe = 0x0006,
     /// [`Joystick`](crate::Joystick), binary.
     Joystick = 0x0010,
     /// [`WinchCommand`](crate::WinchCommand), binary.
@@ -56,11 +60,13 @@ pub enum Kind {
 
 impl Kind {
     /// Every kind of this version, in code order.
-    pub const ALL: [Kind; 11] = [
+    pub const ALL: [Kind; 13] = [
         Kind::PoseFrame,
         Kind::SolverStats,
         Kind::Signals,
         Kind::Events,
+        Kind::Applied,
+        Kind::Keyframe,
         Kind::Joystick,
         Kind::Winch,
         Kind::Boom,
@@ -88,6 +94,8 @@ impl Kind {
             Kind::SolverStats => "solver-stats",
             Kind::Signals => "signals",
             Kind::Events => "events",
+            Kind::Applied => "applied",
+            Kind::Keyframe => "keyframe",
             Kind::Joystick => "joystick",
             Kind::Winch => "winch",
             Kind::Boom => "boom",
@@ -114,6 +122,11 @@ impl Kind {
                 SIGNALS_FIXED_LEN + CHANNEL_RECORD_LEN * MAX_CHANNELS + CONTACT_RECORD_LEN * MAX_CONTACTS
             }
             Kind::Events => EVENTS_FIXED_LEN + EVENT_RECORD_LEN * MAX_EVENTS,
+            Kind::Applied => {
+                use crate::journal::*;
+                APPLIED_FIXED_LEN + MAX_APPLIED * (APPLIED_RECORD_HEAD_LEN + MAX_APPLIED_RECORD_LEN)
+            }
+            Kind::Keyframe => MAX_FRAME_LEN - HEADER_LEN,
             Kind::Joystick => JOYSTICK_LEN,
             Kind::Winch => WINCH_LEN,
             Kind::Boom => BOOM_FIXED_LEN + BOOM_ENTRY_LEN * MAX_BOOM_TARGETS,
@@ -360,7 +373,7 @@ mod tests {
             assert_eq!(k.is_json(), k.code() >= 0x100);
             assert!(HEADER_LEN + k.max_payload_len() <= MAX_FRAME_LEN, "{k}");
         }
-        assert_eq!(Kind::from_code(0x0005), None);
+        assert_eq!(Kind::from_code(0x0007), None);
     }
 
     #[test]

@@ -31,6 +31,9 @@ pub const MAX_WORLD_NAME_LEN: usize = 64;
 pub const DEFAULT_WORLD: &str = "default";
 /// Last segment of the Zenoh liveliness token of a world's server ([`WorldName::server_token`]).
 pub const SERVER_TOKEN: &str = "server";
+/// The segment under which lockstep controllers hold their liveliness tokens
+/// (`pivotsim/<world>/controller/<id>`).
+pub const CONTROLLER_TOKENS: &str = "controller";
 /// Last segment of the one iceoryx2 service that carries every input frame.
 pub const IOX_INPUT_SERVICE: &str = "cmd";
 /// Samples a subscriber of the server's iceoryx2 services buffers: the server creates them with
@@ -113,7 +116,7 @@ impl WorldName {
             Topic::Joystick | Topic::Winch | Topic::Boom | Topic::Actuator => {
                 Some(format!("{KEY_PREFIX}/{}/{IOX_INPUT_SERVICE}", self.0))
             }
-            Topic::Scene | Topic::Control => None,
+            Topic::Scene | Topic::Control | Topic::Applied | Topic::Keyframes => None,
         }
     }
 
@@ -122,6 +125,18 @@ impl WorldName {
     /// start, and clients may watch it to know whether a server is up.
     pub fn server_token(&self) -> String {
         format!("{KEY_PREFIX}/{}/{SERVER_TOKEN}", self.0)
+    }
+
+    /// The liveliness token of the lockstep controller `id` (`pivotsim/<world>/controller/<id>`;
+    /// `id` follows the world-name rules): the server watches these and acts when the last one
+    /// goes away (`serve --on-controller-lost`).
+    pub fn controller_token(&self, id: &WorldName) -> String {
+        format!("{KEY_PREFIX}/{}/{CONTROLLER_TOKENS}/{}", self.0, id.0)
+    }
+
+    /// The key expression of every controller token of this world.
+    pub fn controller_tokens(&self) -> String {
+        format!("{KEY_PREFIX}/{}/{CONTROLLER_TOKENS}/*", self.0)
     }
 
     /// Clears `out` and writes the key of `topic` into it (no allocation once `out` has grown).
@@ -166,6 +181,11 @@ pub enum Topic {
     Signals,
     /// Threshold crossings and faults, published at the steps that have them.
     Events,
+    /// What changed the world before a step (inputs, world-acting control requests, deadman
+    /// trips), published at the steps that had any.
+    Applied,
+    /// Snapshots of the state, every few seconds and at each new scene state.
+    Keyframes,
     /// Joystick inputs.
     Joystick,
     /// Winch commands.
@@ -182,11 +202,13 @@ pub enum Topic {
 
 impl Topic {
     /// Every topic.
-    pub const ALL: [Topic; 10] = [
+    pub const ALL: [Topic; 12] = [
         Topic::Poses,
         Topic::Stats,
         Topic::Signals,
         Topic::Events,
+        Topic::Applied,
+        Topic::Keyframes,
         Topic::Joystick,
         Topic::Winch,
         Topic::Boom,
@@ -205,6 +227,8 @@ impl Topic {
             Topic::Stats => "stats",
             Topic::Signals => "signals",
             Topic::Events => "events",
+            Topic::Applied => "applied",
+            Topic::Keyframes => "keyframes",
             Topic::Joystick => "cmd/joystick",
             Topic::Winch => "cmd/winch",
             Topic::Boom => "cmd/boom",
@@ -228,6 +252,8 @@ impl Topic {
             Topic::Stats => Kind::SolverStats,
             Topic::Signals => Kind::Signals,
             Topic::Events => Kind::Events,
+            Topic::Applied => Kind::Applied,
+            Topic::Keyframes => Kind::Keyframe,
             Topic::Joystick => Kind::Joystick,
             Topic::Winch => Kind::Winch,
             Topic::Boom => Kind::Boom,
@@ -295,6 +321,8 @@ mod tests {
                 "pivotsim/crane-1/stats",
                 "pivotsim/crane-1/signals",
                 "pivotsim/crane-1/events",
+                "pivotsim/crane-1/applied",
+                "pivotsim/crane-1/keyframes",
                 "pivotsim/crane-1/cmd/joystick",
                 "pivotsim/crane-1/cmd/winch",
                 "pivotsim/crane-1/cmd/boom",

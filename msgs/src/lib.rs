@@ -21,6 +21,7 @@ pub mod header;
 mod codes;
 mod control;
 mod input;
+mod journal;
 mod json;
 mod keys;
 mod layout;
@@ -36,16 +37,21 @@ pub use codes::{ActuatorMode, REJECT_REASONS, RejectReason, SolveStatus, SolverV
 pub use control::{
     ControlCommand, ControlError, ControlErrorCode, ControlFailure, ControlOutcome, ControlReply,
     ControlRequest, FaultKind, MAX_FAULT_TARGET_LEN, MAX_MESSAGE_LEN, MAX_SCENE_REF_LEN, MAX_STEP_COUNT,
-    ServerStatus,
+    ServerStatus, StepReport,
 };
 pub use header::{DecodeError, FORMAT_VERSION, FrameError, HEADER_LEN, Header, Kind, MAGIC, MAX_FRAME_LEN};
 pub use input::{
     ACTUATOR_LEN, ActuatorCommand, BOOM_ENTRY_LEN, BOOM_FIXED_LEN, BoomCommand, BoomTarget, InputCommand,
     InputError, JOYSTICK_LEN, Joystick, MAX_AXES, MAX_BOOM_TARGETS, MAX_BUTTONS, WINCH_LEN, WinchCommand,
 };
+pub use journal::{
+    APPLIED_FIXED_LEN, APPLIED_RECORD_HEAD_LEN, AppliedFrame, AppliedKind, AppliedRecord, JournalError,
+    KEYFRAME_FIXED_LEN, KeyframeReason, KeyframeView, MAX_APPLIED, MAX_APPLIED_RECORD_LEN,
+    RECORD_TOPIC_APPLIED, RECORD_TOPIC_KEYFRAMES, RECORD_TOPIC_POSES, RECORD_WIRE_ENCODING, SNAPSHOT_MAGIC,
+};
 pub use keys::{
-    DEFAULT_WORLD, IOX_INPUT_SERVICE, IOX_SUBSCRIBER_BUFFER, KEY_PREFIX, KeyError, MAX_WORLD_NAME_LEN,
-    SERVER_TOKEN, Topic, WorldName, inputs_wildcard, parse_key,
+    CONTROLLER_TOKENS, DEFAULT_WORLD, IOX_INPUT_SERVICE, IOX_SUBSCRIBER_BUFFER, KEY_PREFIX, KeyError,
+    MAX_WORLD_NAME_LEN, SERVER_TOKEN, Topic, WorldName, inputs_wildcard, parse_key,
 };
 pub use message::{Message, MessageError};
 pub use name::{ActuatorName, MAX_ACTUATOR_NAME_LEN, NameError, is_name_byte, validate_actuator_name};

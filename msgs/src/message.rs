@@ -7,6 +7,7 @@
 use crate::control::{ControlError, ControlReply, ControlRequest};
 use crate::header::{self, DecodeError, FrameError, Kind};
 use crate::input::{InputCommand, InputError};
+use crate::journal::{AppliedFrame, JournalError, KeyframeReason, KeyframeView};
 use crate::pose::{PoseError, PoseFrame};
 use crate::scene::{SceneDescription, SceneError};
 use crate::signals::{EventsFrame, SignalsError, SignalsFrame};
@@ -23,6 +24,19 @@ pub enum Message {
     Signals(SignalsFrame),
     /// `0x0004`.
     Events(EventsFrame),
+    /// `0x0005`.
+    Applied(AppliedFrame),
+    /// `0x0006`, owning its snapshot bytes.
+    Keyframe {
+        /// The state the snapshot holds.
+        sequence: u64,
+        /// Its time (s).
+        sim_time: f64,
+        /// Why it was taken.
+        reason: KeyframeReason,
+        /// The snapshot file.
+        snapshot: Vec<u8>,
+    },
     /// `0x0010..=0x0013`.
     Input(InputCommand),
     /// `0x0100`.
@@ -48,6 +62,9 @@ pub enum MessageError {
     /// Signals or events content.
     #[error(transparent)]
     Signals(#[from] SignalsError),
+    /// Journal content.
+    #[error(transparent)]
+    Journal(#[from] JournalError),
     /// Input content.
     #[error(transparent)]
     Input(#[from] InputError),
@@ -80,6 +97,8 @@ impl Message {
             Message::Stats(_) => Kind::SolverStats,
             Message::Signals(_) => Kind::Signals,
             Message::Events(_) => Kind::Events,
+            Message::Applied(_) => Kind::Applied,
+            Message::Keyframe { .. } => Kind::Keyframe,
             Message::Input(i) => i.kind(),
             Message::ControlRequest(_) => Kind::ControlRequest,
             Message::ControlReply(_) => Kind::ControlReply,
@@ -94,6 +113,16 @@ impl Message {
             Kind::SolverStats => Message::Stats(SolverStats::decode(bytes)?),
             Kind::Signals => Message::Signals(SignalsFrame::decode(bytes)?),
             Kind::Events => Message::Events(EventsFrame::decode(bytes)?),
+            Kind::Applied => Message::Applied(AppliedFrame::decode(bytes)?),
+            Kind::Keyframe => {
+                let k = KeyframeView::parse(bytes)?;
+                Message::Keyframe {
+                    sequence: k.sequence,
+                    sim_time: k.sim_time,
+                    reason: k.reason,
+                    snapshot: k.snapshot.to_vec(),
+                }
+            }
             Kind::Joystick | Kind::Winch | Kind::Boom | Kind::Actuator => {
                 Message::Input(InputCommand::decode(bytes)?)
             }
@@ -110,6 +139,11 @@ impl Message {
             Message::Stats(m) => m.encode(buf)?,
             Message::Signals(m) => m.encode(buf)?,
             Message::Events(m) => m.encode(buf)?,
+            Message::Applied(m) => m.encode(buf)?,
+            Message::Keyframe { sequence, sim_time, reason, snapshot } => {
+                KeyframeView { sequence: *sequence, sim_time: *sim_time, reason: *reason, snapshot }
+                    .encode(buf)?
+            }
             Message::Input(m) => m.encode(buf)?,
             Message::ControlRequest(m) => m.encode(buf)?,
             Message::ControlReply(m) => m.encode(buf)?,

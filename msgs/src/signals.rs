@@ -155,6 +155,11 @@ pub enum EventCode {
     Fault = 2,
     /// A fault request was refused.
     FaultRejected = 3,
+    /// A lockstep controller appeared (its liveliness token; the name is its id).
+    ControllerJoined = 4,
+    /// A lockstep controller disappeared (the name is its id; `value` 1 when the server
+    /// resumed real time, 0 when it stays paused).
+    ControllerLost = 5,
 }
 
 impl EventCode {
@@ -165,6 +170,8 @@ impl EventCode {
             1 => Some(EventCode::Cleared),
             2 => Some(EventCode::Fault),
             3 => Some(EventCode::FaultRejected),
+            4 => Some(EventCode::ControllerJoined),
+            5 => Some(EventCode::ControllerLost),
             _ => None,
         }
     }
@@ -175,6 +182,8 @@ impl EventCode {
             EventCode::Cleared => "cleared",
             EventCode::Fault => "fault",
             EventCode::FaultRejected => "fault-rejected",
+            EventCode::ControllerJoined => "controller-joined",
+            EventCode::ControllerLost => "controller-lost",
         }
     }
 }
@@ -638,7 +647,7 @@ mod tests {
         assert_eq!(b.len(), e.encoded_len());
         assert_eq!(EventsFrame::decode(&b).unwrap(), e);
         let mut x = b.clone();
-        x[HEADER_LEN + EVENTS_FIXED_LEN + 32] = 4;
+        x[HEADER_LEN + EVENTS_FIXED_LEN + 32] = 6;
         assert!(matches!(
             EventsFrame::decode(&x),
             Err(DecodeError::Invalid(SignalsError::UnknownCode { .. }))

@@ -140,7 +140,7 @@ fn json_frame(kind: Kind, json: &str) -> Vec<u8> {
 #[test]
 fn readme_control_examples_decode_and_encode_identically() {
     let requests = block_after("<!-- example:control-request -->");
-    assert_eq!(requests.len(), 9);
+    assert_eq!(requests.len(), 13);
     let mut buf = Vec::new();
     for line in requests {
         let r = ControlRequest::decode(&json_frame(Kind::ControlRequest, line))
@@ -273,14 +273,21 @@ fn readme_reply_examples_answer_their_requests() {
                 if let ControlCommand::SetVariant { variant } = req.command {
                     assert_eq!(status.variant, variant, "{line}");
                 }
+                // Lockstep replies say how many steps they took; no other reply does.
+                let lockstep =
+                    matches!(req.command, ControlCommand::Step { .. } | ControlCommand::RunUntil { .. });
+                assert_eq!(status.steps.is_some(), lockstep, "{line}");
             }
             ControlOutcome::Error(f) => {
                 use ControlErrorCode as C;
                 let ops: &[&str] = match f.code {
-                    C::UnknownScene | C::SceneLoadFailed | C::LoadRefused => &["load_scene", "reset"],
+                    C::UnknownScene | C::SceneLoadFailed => &["load_scene", "reset"],
+                    C::LoadRefused => &["load_scene", "reset", "snapshot", "restore"],
                     C::UnknownVariant => &["set_variant"],
                     C::FaultRejected => &["fault"],
-                    C::Busy => &["step"],
+                    C::Busy => &["step", "run_until"],
+                    C::InThePast => &["run_until"],
+                    C::SnapshotFailed => &["snapshot", "restore"],
                     C::InvalidRequest | C::Internal => &[],
                 };
                 assert!(ops.is_empty() || ops.contains(&op.as_str()), "{line} answers a `{op}` request");

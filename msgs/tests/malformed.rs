@@ -82,7 +82,7 @@ fn bad_magic_version_kind_flags() {
         v[4..6].copy_from_slice(&version.to_le_bytes());
         assert_eq!(frame_err(&v), FrameError::UnsupportedVersion { found: version });
     }
-    for code in [0u16, 5, 0x0014, 0x0103, 0x0200, 0xFFFF] {
+    for code in [0u16, 7, 0x0014, 0x0103, 0x0200, 0xFFFF] {
         let mut k = b.clone();
         k[6..8].copy_from_slice(&code.to_le_bytes());
         assert_eq!(frame_err(&k), FrameError::UnknownKind { found: code });
@@ -395,6 +395,7 @@ fn control_errors() {
         sequence: 0,
         sim_time: f64::NAN,
         variant: SolverVariant::Pgs,
+        steps: None,
     };
     assert!(matches!(ControlReply::ok(1, nan).encode(&mut Vec::new()), Err(ControlError::SimTime { .. })));
 }

@@ -7,4 +7,5 @@ pub mod run;
 pub mod scene;
 pub mod serve;
 pub mod signals;
+pub mod snapshot;
 pub mod solver;

@@ -31,12 +31,28 @@ struct Cli {
 enum Command {
     /// Serve a scene in real time over Zenoh and iceoryx2 (the default command).
     Serve(cli::serve::ServeArgs),
+    /// Replay a recorded session (`pivotsim-client record`) bit for bit: served like a live
+    /// server, or checked (`--check`); `--from T`, `--branch T` (README "Rig control").
+    Replay(cli::replay::ReplayArgs),
     /// Run a scene headless under its script, as fast as possible, and print a summary.
     Run {
         /// A built-in scene name (see `scenes`) or a scene file path.
-        #[arg(long)]
-        scene: String,
-        /// Simulated seconds, a finite number > 0 up to 1e6 (default: the scene's duration).
+        #[arg(long, required_unless_present = "from", conflicts_with = "from")]
+        scene: Option<String>,
+        /// Go on from this snapshot (`--snapshot`, or the server's `snapshot` request) instead of
+        /// a scene's start: the scene is the one the snapshot carries, the run repeats the
+        /// uninterrupted run bit for bit (README "Rig control").
+        #[arg(long, value_name = "FILE", conflicts_with = "set")]
+        from: Option<PathBuf>,
+        /// Write a snapshot of the complete state when the world reaches this time (s; rounded to
+        /// a step within the run). Needs --snapshot.
+        #[arg(long, value_name = "T", requires = "snapshot", allow_negative_numbers = true)]
+        snapshot_at: Option<f64>,
+        /// The snapshot file --snapshot-at writes.
+        #[arg(long, value_name = "FILE", requires = "snapshot_at")]
+        snapshot: Option<PathBuf>,
+        /// Simulated seconds, a finite number > 0 up to 1e6 (default: the scene's duration; from a
+        /// snapshot, what is left of it).
         #[arg(long, allow_negative_numbers = true, value_parser = values::run_seconds)]
         duration: Option<f64>,
         /// Solver variant for every island (default: the scene's).
@@ -105,6 +121,14 @@ enum Command {
         /// rotation, cold and warm; `sweep.json` in the output directory).
         #[arg(long, value_parser = clap::value_parser!(u32).range(1..=1_000_000))]
         sweep: Option<u32>,
+        /// Run only the hardest-solves stage: each shipped scene's 7 hardest warm solves (dumped
+        /// by a run as shipped, or read from `--data DIR/<scene>/`), timed with every exact variant
+        /// beside ODE's column of issue 31 (`hard.md`, `hard.json`, `hard.svg`).
+        #[arg(long, conflicts_with = "sweep")]
+        hard: bool,
+        /// With --hard: solves per file and variant, the median taken (1 to 1,000).
+        #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u32).range(1..=1_000))]
+        repeats: u32,
     },
     /// The speed/accuracy report: every paper scene with every variant, the paper's Tables 2–4 and
     /// Fig. 3, 5/6, 7 beside its numbers, residual against time for PGS and block pivoting, warm
@@ -126,6 +150,9 @@ fn main() -> ExitCode {
         Some(Command::Solve(args)) => cli::solve::solve(&args),
         Some(Command::Run {
             scene,
+            from,
+            snapshot_at,
+            snapshot,
             duration,
             variant,
             stats,
@@ -147,18 +174,29 @@ fn main() -> ExitCode {
                 dump_hard: dump_hard as usize,
                 shadow,
                 progress: !json,
+                snapshot: snapshot_at
+                    .zip(snapshot)
+                    .map(|(time, path)| pivotsim_server::run::SnapshotAt { time, path }),
+                watchdog: None,
             };
-            cli::run::run(&scene, &set, &opts, json)
+            match (scene, from) {
+                (_, Some(file)) => cli::run::run(cli::run::Start::Snapshot(file), &set, opts, json),
+                (Some(scene), None) => cli::run::run(cli::run::Start::Scene(scene), &set, opts, json),
+                (None, None) => Err(anyhow::anyhow!("give --scene or --from")),
+            }
         }
         Some(Command::Scenes) => {
             cli::run::scenes();
             Ok(())
         }
         Some(Command::Pattern { file, out, ordering }) => cli::pattern::pattern(&file, &out, ordering),
-        Some(Command::BenchSolver { out, quick, data, sweep }) => {
+        Some(Command::BenchSolver { out, quick, data, sweep, hard, repeats }) => {
             let cfg = cli::bench::BenchConfig::new(out, quick, data);
             match sweep {
                 Some(n) => cli::bench::sweep::run(n as usize, &cfg.out).map(|_| ()),
+                None if hard => {
+                    cli::bench::hard::run(&cfg.out, cfg.data.as_deref(), repeats as usize).map(|_| ())
+                }
                 None => cli::bench::run(&cfg).map(|_| ()),
             }
         }
@@ -171,6 +209,7 @@ fn main() -> ExitCode {
             cli::report::run(&cfg).map(|_| ())
         }
         Some(Command::Serve(args)) => cli::serve::serve(args),
+        Some(Command::Replay(args)) => cli::replay::replay(args),
         None => cli::serve::serve(cli.serve),
     };
     match result {

@@ -30,6 +30,7 @@ use thiserror::Error;
 
 use crate::dynamics::{IslandStats, MAX_SHADOWS, Watchdog, World};
 use crate::scene::{Scene, SceneStepError};
+use crate::snapshot::{Snapshot, SnapshotError};
 use crate::solver::{SolveStatus, Variant, io};
 
 /// What to run and what to write.
@@ -56,6 +57,21 @@ pub struct RunOptions {
     pub shadow: Vec<Variant>,
     /// Show a progress bar on a terminal.
     pub progress: bool,
+    /// Write a snapshot (`snapshot/`) when the world reaches this time (`--snapshot-at`,
+    /// `--snapshot`).
+    pub snapshot: Option<SnapshotAt>,
+    /// The watchdog's ledger to go on from (a run from a snapshot, `--from`), instead of a new
+    /// watchdog started at the first step's state.
+    pub watchdog: Option<Watchdog>,
+}
+
+/// Where and when a run writes a snapshot.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SnapshotAt {
+    /// Simulation time (s), rounded to the nearest step; within the run.
+    pub time: f64,
+    /// The file.
+    pub path: PathBuf,
 }
 
 /// The run's summary (`--json` prints it as one object).
@@ -187,6 +203,9 @@ pub enum RunError {
     /// A bad option.
     #[error("{0}")]
     Option(String),
+    /// Writing the snapshot.
+    #[error("snapshot: {0}")]
+    Snapshot(#[from] SnapshotError),
 }
 
 #[derive(Serialize)]
@@ -277,6 +296,7 @@ pub fn run_scene_observed(
     mut on_step: impl FnMut(&World),
 ) -> Result<RunSummary, RunError> {
     let steps = prepare(scene, opts)?;
+    let snapshot_step = snapshot_step(scene, opts, steps)?;
     let mut out = Outputs::open(opts)?;
     let bar = progress_bar(opts.progress, steps, &scene.name);
     let mut sum = RunSummary::start(&scene.name, scene.world.settings().solver.variant.name());
@@ -291,7 +311,7 @@ pub fn run_scene_observed(
         solve_cpu_us: Vec::with_capacity(steps as usize),
         ..Acc::default()
     };
-    let mut watchdog = Watchdog::new(&scene.world, scene.watchdog);
+    let mut watchdog = opts.watchdog.clone().unwrap_or_else(|| Watchdog::new(&scene.world, scene.watchdog));
     let every = opts.every.max(1);
     let start = Instant::now();
     let tick = (steps / 200).max(1);
@@ -316,6 +336,11 @@ pub fn run_scene_observed(
         }
         on_step(world);
         out.write_step(world, &scene.name, dump, &mut sum)?;
+        if let Some((at, path)) = snapshot_step
+            && world.steps() == at
+        {
+            Snapshot::capture(scene, Some(&watchdog))?.write(path)?;
+        }
         hard.offer(world);
         if n % tick == 0 {
             bar.set_position(n + 1);
@@ -345,6 +370,28 @@ fn prepare(scene: &mut Scene, opts: &RunOptions) -> Result<u64, RunError> {
         return Err(RunError::Option(format!("duration {duration} must be a finite number > 0")));
     }
     Ok((duration / h).round() as u64)
+}
+
+/// The world step count after which the options' snapshot is written: `--snapshot-at` rounded to
+/// the nearest step, which must fall within the run's `steps` from the world's present step.
+fn snapshot_step<'a>(
+    scene: &Scene,
+    opts: &'a RunOptions,
+    steps: u64,
+) -> Result<Option<(u64, &'a Path)>, RunError> {
+    let Some(at) = &opts.snapshot else { return Ok(None) };
+    let (h, now) = (scene.world.settings().timestep, scene.world.steps());
+    let step = (at.time / h).round();
+    let (first, last) = (now + 1, now + steps);
+    if !(at.time.is_finite() && step >= first as f64 && step <= last as f64) {
+        return Err(RunError::Option(format!(
+            "--snapshot-at {} is outside the run ({:.4} s to {:.4} s)",
+            at.time,
+            first as f64 * h,
+            last as f64 * h
+        )));
+    }
+    Ok(Some((step as u64, at.path.as_path())))
 }
 
 /// A progress bar over `steps` labelled `name` (hidden unless `show`).

@@ -100,3 +100,65 @@ fn scenes_lists_every_builtin_and_a_broken_file_is_located() {
     assert!(String::from_utf8_lossy(&out.stderr).contains("box_stack"), "lists the built-in names");
     let _ = std::fs::remove_file(&f);
 }
+
+/// The poses CSV rows of the steps after `step`.
+fn pose_rows_after(path: &std::path::Path, step: u64) -> Vec<String> {
+    let text = std::fs::read_to_string(path).unwrap();
+    text.lines()
+        .skip(1)
+        .filter(|l| l.split(',').next().unwrap().parse::<u64>().unwrap() > step)
+        .map(String::from)
+        .collect()
+}
+
+#[test]
+fn run_from_a_snapshot_repeats_the_uninterrupted_run_row_for_row() {
+    let dir = temp_dir("scene-cli-snapshot");
+    let (whole, rest, snap) = (dir.join("whole.csv"), dir.join("rest.csv"), dir.join("forklift.snap"));
+    let out = bin()
+        .args(["run", "--scene", "forklift", "--duration", "4", "--json", "--snapshot-at", "2.5"])
+        .arg("--snapshot")
+        .arg(&snap)
+        .arg("--poses")
+        .arg(&whole)
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let out = bin()
+        .args(["run", "--duration", "1.5", "--json", "--from"])
+        .arg(&snap)
+        .arg("--poses")
+        .arg(&rest)
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(v["steps"], 90);
+    assert_eq!(v["stable"], true);
+    let (a, b) = (pose_rows_after(&whole, 150), pose_rows_after(&rest, 150));
+    assert!(a.len() >= 90 && a.len() % 90 == 0, "one row per dynamic body for each of steps 151..=240");
+    assert_eq!(a, b, "the run from the snapshot differs from the uninterrupted run");
+
+    // Bad input: a snapshot time outside the run, a missing or damaged file, --from with --set.
+    let bad = |args: &[&str]| {
+        let out = bin().args(args).output().unwrap();
+        assert!(!out.status.success(), "{args:?} succeeded");
+        String::from_utf8_lossy(&out.stderr).to_string()
+    };
+    let p = snap.to_str().unwrap();
+    assert!(
+        bad(&["run", "--scene", "forklift", "--duration", "1", "--snapshot-at", "5", "--snapshot", p])
+            .contains("outside the run")
+    );
+    assert!(
+        bad(&["run", "--scene", "forklift", "--duration", "1", "--snapshot-at", "NaN", "--snapshot", p])
+            .contains("outside the run")
+    );
+    let missing = dir.join("missing.snap");
+    assert!(bad(&["run", "--from", missing.to_str().unwrap()]).contains("missing.snap"));
+    let garbage = dir.join("garbage.snap");
+    std::fs::write(&garbage, b"PIVSNAP\0\x01\0\0\0garbage").unwrap();
+    assert!(bad(&["run", "--from", garbage.to_str().unwrap()]).contains("damaged snapshot"));
+    assert!(bad(&["run", "--from", p, "--set", "max_pivot_steps=5"]).contains("--set"));
+    assert!(bad(&["run", "--snapshot-at", "1", "--scene", "forklift"]).contains("--snapshot"));
+}

@@ -60,10 +60,12 @@ fn signals_every_step_events_once_and_faults_by_control() {
     assert!(e.frames().signals == e.signals_frame());
 }
 
-/// `step N` on a paused world publishes one set of frames after its last step; the events of the
-/// steps before travel with it (a fault that acts at the first of three steps is in the frame).
+/// `step N` on a paused world (lockstep) gives every step its frames, with consecutive sequences:
+/// a fault requested before the request acts at its first step and its event is in that step's
+/// events frame; the reply, after the last step, says how many steps were taken.
 #[test]
-fn a_multi_step_request_publishes_the_events_of_every_step() {
+fn a_multi_step_request_publishes_every_step_with_its_events() {
+    use pivotsim_server::serve::engine::ControlStep;
     let mut e = Engine::new("crane", msgs::WorldName::new("sig3").unwrap(), Duration::from_secs(60)).unwrap();
     let t = Instant::now();
     assert!(e.tick(t));
@@ -73,21 +75,43 @@ fn a_multi_step_request_publishes_the_events_of_every_step() {
         o => panic!("{o:?}"),
     }
     let before = e.sequence();
-    match control(&mut e, 2, msgs::ControlCommand::Step { count: 3 }) {
-        msgs::ControlOutcome::Ok(_) => {}
-        o => panic!("{o:?}"),
+    let mut buf = Vec::new();
+    msgs::ControlRequest { id: 2, command: msgs::ControlCommand::Step { count: 3 } }
+        .encode(&mut buf)
+        .unwrap();
+    let ControlStep::Steps(mut job) = e.begin_control(&buf) else { panic!("a lockstep job") };
+    let h = e.scene().world.settings().timestep;
+    let mut frames = Vec::new();
+    for k in 0..3 {
+        let more = e.lockstep_step(&mut job);
+        assert_eq!(more, k < 2);
+        let pose = msgs::PoseFrameView::parse(e.pose_frame()).unwrap();
+        let events =
+            (!e.events_frame().is_empty()).then(|| msgs::EventsFrame::decode(e.events_frame()).unwrap());
+        frames.push((pose.sequence(), pose.sim_time(), events));
     }
-    assert_eq!(e.sequence(), before + 3);
-    let ev = msgs::EventsFrame::decode(e.events_frame()).unwrap();
-    assert_eq!(ev.sequence, e.sequence());
+    assert!(!e.lockstep_step(&mut job), "no step beyond the request");
+    let seqs: Vec<u64> = frames.iter().map(|f| f.0).collect();
+    assert_eq!(seqs, [before + 1, before + 2, before + 3], "one frame per step, no jump");
+    let ev = frames[0].2.as_ref().expect("the first step's events frame");
+    assert_eq!(ev.sequence, before + 1);
     let fault_at: Vec<f64> =
         ev.events.iter().filter(|x| x.kind == msgs::EventCode::Fault).map(|x| x.time).collect();
     assert_eq!(fault_at.len(), 1, "{:?}", ev.events);
-    // Stamped with the time it acted, the start of the first of the three steps: three steps
-    // before the frame's time.
-    let h = e.scene().world.settings().timestep;
-    let lag = ev.sim_time - fault_at[0];
-    assert!((lag - 3.0 * h).abs() < 1e-9, "fault at {} s, frame at {} s", fault_at[0], ev.sim_time);
-    let s = msgs::SignalsFrame::decode(e.signals_frame()).unwrap();
-    assert_eq!(s.events_total, ev.events_total);
+    // Stamped with the time it acted, the start of the step whose frame carries it.
+    assert!(
+        (frames[0].1 - fault_at[0] - h).abs() < 1e-9,
+        "fault at {} s, frame at {} s",
+        fault_at[0],
+        frames[0].1
+    );
+    for f in &frames[1..] {
+        assert!(f.2.as_ref().is_none_or(|ev| ev.events.iter().all(|x| x.kind != msgs::EventCode::Fault)));
+    }
+    let reply = msgs::ControlReply::decode(&e.finish_steps(&job)).unwrap();
+    let msgs::ControlOutcome::Ok(status) = reply.outcome else { panic!("{reply:?}") };
+    assert_eq!((reply.id, status.sequence, status.paused), (2, before + 3, true));
+    let steps = status.steps.expect("a lockstep reply says how many steps");
+    assert_eq!(steps.count, 3);
+    assert!(steps.island_solves >= 3);
 }

@@ -179,6 +179,9 @@ pub fn control_request() -> impl Strategy<Value = ControlRequest> {
         prop::sample::select(SolverVariant::ALL.to_vec())
             .prop_map(|variant| ControlCommand::SetVariant { variant }),
         scene_ref().prop_map(|scene| ControlCommand::LoadScene { scene }),
+        (0.0..1e6f64).prop_map(|sim_time| ControlCommand::RunUntil { sim_time }),
+        "[A-Za-z0-9_-]{1,20}(/[A-Za-z0-9_.-]{1,20}){0,3}".prop_map(|path| ControlCommand::Snapshot { path }),
+        "[A-Za-z0-9_-]{1,20}(/[A-Za-z0-9_.-]{1,20}){0,3}".prop_map(|path| ControlCommand::Restore { path }),
         (
             prop::sample::select(FaultKind::ALL.to_vec()),
             "[A-Za-z0-9_./-]{1,64}",
@@ -204,13 +207,20 @@ pub fn control_reply() -> impl Strategy<Value = ControlReply> {
         any::<u64>(),
         non_negative(),
         prop::sample::select(SolverVariant::ALL.to_vec()),
+        prop::option::of((any::<u32>(), any::<u32>(), any::<u32>(), non_negative())),
     )
-        .prop_map(|(scene, paused, sequence, sim_time, variant)| ServerStatus {
+        .prop_map(|(scene, paused, sequence, sim_time, variant, steps)| ServerStatus {
             scene,
             paused,
             sequence,
             sim_time,
             variant,
+            steps: steps.map(|(count, island_solves, not_converged, max_residual_rel)| StepReport {
+                count,
+                island_solves,
+                not_converged,
+                max_residual_rel,
+            }),
         });
     let codes = vec![
         ControlErrorCode::InvalidRequest,
@@ -220,6 +230,8 @@ pub fn control_reply() -> impl Strategy<Value = ControlReply> {
         ControlErrorCode::LoadRefused,
         ControlErrorCode::Busy,
         ControlErrorCode::FaultRejected,
+        ControlErrorCode::InThePast,
+        ControlErrorCode::SnapshotFailed,
         ControlErrorCode::Internal,
     ];
     let outcome = prop_oneof![
@@ -549,6 +561,20 @@ pub fn sample_frames() -> Vec<(Kind, Vec<u8>)> {
             s
         }),
         Message::Events(sample_events()),
+        Message::Applied(AppliedFrame {
+            sequence: 12,
+            sim_time: 0.2,
+            records: vec![
+                AppliedRecord { kind: AppliedKind::Input, bytes: vec![1, 2, 3, 4, 5] },
+                AppliedRecord { kind: AppliedKind::Deadman, bytes: vec![] },
+            ],
+        }),
+        Message::Keyframe {
+            sequence: 12,
+            sim_time: 0.2,
+            reason: KeyframeReason::Periodic,
+            snapshot: [&SNAPSHOT_MAGIC[..], &[1, 2, 3]].concat(),
+        },
     ];
     msgs.iter()
         .map(|m| {

@@ -7,6 +7,7 @@
 //! | `bench/` | `bench-solver`: kernel crossover, paper Fig. 4, every variant on every problem |
 //! | `pattern.rs` | `pattern`: sparsity plots of an MLCP file (paper Fig. 5 and 6) |
 //! | `report/` | `report`: the speed/accuracy report (paper Tables 2–4, Fig. 3, 5/6, 7, the trade, extremes) |
+//! | `replay.rs` | `replay`: a recorded session served again bit for bit, or checked |
 //! | `run.rs` | `run` (a scene headless) and `scenes` |
 //! | `serve.rs` | `serve`, the default: options, the start message, the final report |
 //! | `solve.rs` | `solve`: one MLCP file, text or JSON (`SolveStats` as it serializes) |
@@ -14,6 +15,7 @@
 
 pub mod bench;
 pub mod pattern;
+pub mod replay;
 pub mod report;
 pub mod run;
 pub mod serve;

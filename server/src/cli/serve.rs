@@ -8,6 +8,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Duration;
 
 use anyhow::Context;
+use pivotsim_server::serve::config::ControllerLost;
 use pivotsim_server::serve::{MAX_DEADMAN_MS, ServeConfig, Started, ZenohOptions};
 
 use super::values;
@@ -79,6 +80,20 @@ pub struct ServeArgs {
     /// Largest scene file `load_scene` or `reset` reads, in bytes (at least 1).
     #[arg(long, default_value_t = pivotsim_server::serve::loader::DEFAULT_MAX_SCENE_BYTES, value_parser = clap::value_parser!(u64).range(1..))]
     pub max_scene_bytes: u64,
+    /// The directory where the `snapshot` control request writes and `restore` reads (files named
+    /// relative to it; no `..`, no absolute paths). Default: none, so both are refused.
+    #[arg(long, value_name = "DIR")]
+    pub snapshot_dir: Option<PathBuf>,
+    /// Seconds of simulation time between keyframes on `pivotsim/<world>/keyframes` (snapshots a
+    /// recording replays from; 0: only at the start, at each load, reset and restore, and on the
+    /// control request `keyframe`).
+    #[arg(long, value_name = "S", default_value_t = pivotsim_server::serve::journal::DEFAULT_KEYFRAME_EVERY, value_parser = values::non_negative_finite)]
+    pub keyframes: f64,
+    /// What the server does when the last lockstep controller (a Zenoh liveliness token on
+    /// `pivotsim/<world>/controller/<id>`, or an iceoryx2 node of that name) disappears: `pause` (stay paused, the default) or
+    /// `resume` (real time goes on). Either way an event `controller-lost` says so.
+    #[arg(long, value_name = "WHAT", default_value = "pause", value_parser = ["pause", "resume"])]
+    pub on_controller_lost: String,
 }
 
 impl ServeArgs {
@@ -108,6 +123,12 @@ impl ServeArgs {
             max_solve_us: self.max_solve_us,
             scene_dirs: self.scene_dirs,
             max_scene_bytes: self.max_scene_bytes,
+            snapshot_dir: self.snapshot_dir,
+            keyframes: self.keyframes,
+            on_controller_lost: match self.on_controller_lost.as_str() {
+                "resume" => ControllerLost::Resume,
+                _ => ControllerLost::Pause,
+            },
             slow_load: None,
         }
     }

@@ -6,7 +6,7 @@
 use std::path::{Path, PathBuf};
 
 use anyhow::Context;
-use pivotsim_server::solver::{OrderingKind, SolveStats, Solver, SolverOptions, Variant, io};
+use pivotsim_server::solver::{Mlcp, OrderingKind, SolveStats, Solver, SolverOptions, Variant, io};
 use serde::Serialize;
 
 use super::values;
@@ -37,6 +37,11 @@ pub struct SolveArgs {
     /// Print one JSON object instead of text.
     #[arg(long)]
     pub json: bool,
+    /// Solve this many times in one process (1 to 10,000), each from the file's warm start (or
+    /// cold, as the file says) with the same solver, and report the median and least total time;
+    /// the statistics printed are the last solve's, which every repeat reproduces bit for bit.
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=10_000))]
+    pub repeats: u32,
 }
 
 /// What `solve --json` prints: the file and every statistic of the solve.
@@ -44,9 +49,65 @@ pub struct SolveArgs {
 pub struct SolveReport<'a> {
     /// The problem file as given.
     pub file: String,
+    /// Solves timed (`--repeats`).
+    pub repeats: usize,
+    /// Median total time of the repeats (µs).
+    pub median_us: f64,
+    /// Least total time of the repeats (µs).
+    pub min_us: f64,
     /// The solve's statistics, flattened into the same object.
     #[serde(flatten)]
     pub stats: &'a SolveStats,
+}
+
+/// The times of `repeats` solves of one problem by one solver, and the last solve's statistics
+/// and answer.
+#[derive(Debug, Clone)]
+pub struct Repeated {
+    /// Total time of each solve (µs), in the order run.
+    pub times_us: Vec<f64>,
+    /// The last solve's statistics.
+    pub stats: SolveStats,
+    /// The last solve's `λ` (problem row order).
+    pub lambda: Vec<f64>,
+}
+
+impl Repeated {
+    /// Median of the times (µs).
+    pub fn median_us(&self) -> f64 {
+        super::bench::median(&mut self.times_us.clone())
+    }
+
+    /// Least of the times (µs).
+    pub fn min_us(&self) -> f64 {
+        self.times_us.iter().copied().fold(f64::INFINITY, f64::min)
+    }
+}
+
+/// Solves `p` `repeats` times (at least once) with one solver of options `opts`, each solve from
+/// the problem's own warm start and with the cost model's memory of the earlier repeats forgotten
+/// ([`Solver::forget_history`]). Every repeat must give the same `λ` bit for bit (the solver is
+/// deterministic: no clock decides a step unless a time budget is set); a repeat that does not is an
+/// error, since its time would not be the time of the same solve.
+pub fn solve_repeated(p: &Mlcp, opts: SolverOptions, repeats: usize) -> anyhow::Result<Repeated> {
+    let mut solver = Solver::new(opts);
+    let mut lambda = vec![0.0; p.n()];
+    let mut first: Option<Vec<f64>> = None;
+    let mut times_us = Vec::with_capacity(repeats.max(1));
+    for _ in 0..repeats.max(1) {
+        lambda.fill(0.0);
+        solver.forget_history();
+        times_us.push(solver.solve(p, &mut lambda).total_us);
+        match &first {
+            None => first = Some(lambda.clone()),
+            Some(f) => {
+                if f.iter().zip(&lambda).any(|(a, b)| a.to_bits() != b.to_bits()) {
+                    anyhow::bail!("a repeated solve gave another answer (the solve is not deterministic)");
+                }
+            }
+        }
+    }
+    Ok(Repeated { times_us, stats: solver.stats().clone(), lambda })
 }
 
 /// Runs `solve`.
@@ -64,17 +125,24 @@ pub fn solve(args: &SolveArgs) -> anyhow::Result<()> {
     opts.pgs.max_iterations = max_steps;
     opts.pgs.tol_rel = args.tol;
     opts.measure_deletion_error = args.deletion_error;
-    let mut solver = Solver::new(opts);
-    let mut lambda = vec![0.0; p.n()];
-    let st = solver.solve(&p, &mut lambda).clone();
+    let r = solve_repeated(&p, opts, args.repeats as usize)?;
     if let Some(out) = &args.solution {
-        write_solution(out, &lambda)?;
+        write_solution(out, &r.lambda)?;
     }
     if args.json {
-        let report = SolveReport { file: file.display().to_string(), stats: &st };
+        let report = SolveReport {
+            file: file.display().to_string(),
+            repeats: r.times_us.len(),
+            median_us: r.median_us(),
+            min_us: r.min_us(),
+            stats: &r.stats,
+        };
         println!("{}", serde_json::to_string(&report)?);
     } else {
-        println!("{}", text(file, &st));
+        println!("{}", text(file, &r.stats));
+        if r.times_us.len() > 1 {
+            println!("{} solves: median {:.1} µs, min {:.1} µs", r.times_us.len(), r.median_us(), r.min_us());
+        }
     }
     Ok(())
 }

@@ -7,6 +7,12 @@ pub fn positive_finite(s: &str) -> Result<f64, String> {
     if v.is_finite() && v > 0.0 { Ok(v) } else { Err(format!("{v} is not a finite number > 0")) }
 }
 
+/// A finite number `≥ 0` (seconds between keyframes; 0 turns the periodic ones off).
+pub fn non_negative_finite(s: &str) -> Result<f64, String> {
+    let v: f64 = s.parse().map_err(|e| format!("{e}"))?;
+    if v.is_finite() && v >= 0.0 { Ok(v) } else { Err(format!("{v} is not a finite number ≥ 0")) }
+}
+
 /// Longest simulated duration of `run` (s): about 11.6 days, 60 million steps at 60 Hz.
 pub const MAX_RUN_SECONDS: f64 = 1.0e6;
 
@@ -38,6 +44,7 @@ mod tests {
     fn hostile_values_are_errors_and_ordinary_ones_pass() {
         for bad in ["nan", "NaN", "inf", "-inf", "-1", "0", "x", ""] {
             assert!(positive_finite(bad).is_err(), "{bad}");
+            assert_eq!(non_negative_finite(bad).is_err(), bad != "0", "{bad}");
         }
         assert_eq!(positive_finite("1e-300"), Ok(1e-300));
         assert!(run_seconds("1e300").is_err());

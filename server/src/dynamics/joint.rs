@@ -121,7 +121,7 @@ impl JointKind {
 }
 
 /// The row slots of a joint (also its warm-start keys).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
 pub enum JointRow {
     /// Locked row `k` (`0..6`, see the module table).
     Locked(u8),

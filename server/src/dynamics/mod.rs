@@ -132,4 +132,4 @@ pub use shadow::TooManyShadows;
 pub use stats::{IslandStats, MAX_SHADOWS, ShadowSolve};
 pub use watchdog::{DEFAULT_MAX_JOINT_ERROR, Instability, Watchdog, WatchdogSettings};
 pub use world::SUBSTEP_TURN;
-pub use world::{JointFramesWorld, JointReaction, World};
+pub use world::{BodyState, JointFramesWorld, JointReaction, JointState, World, WorldState, WorldStateError};

@@ -35,7 +35,7 @@
 //! `F = λ / h` the holding force.
 
 /// A free axis of a joint.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
 pub enum FreeAxis {
     /// Translation along the joint's x axis (prismatic, cylindrical).
     Linear,
@@ -82,7 +82,7 @@ pub fn wrap_angle(x: f64) -> f64 {
 }
 
 /// Lower/upper limit of a free coordinate (rad for rotations, m for translations).
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct JointLimit {
     /// Lower bound (may be `−∞`).
     pub lower: f64,
@@ -103,7 +103,7 @@ impl JointLimit {
 pub const DEFAULT_POSITION_GAIN: f64 = 1.0;
 
 /// What a motor drives toward.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub enum MotorMode {
     /// A target speed (rad/s or m/s) of A relative to B about/along the axis, positive in the
     /// sense of the axis.
@@ -123,7 +123,7 @@ pub enum MotorMode {
 }
 
 /// A motor on a free axis: a mode and a force (torque) bound.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct JointMotor {
     /// Velocity or position target.
     pub mode: MotorMode,

@@ -50,7 +50,7 @@ use crate::solver::IndexState;
 pub const MAX_ROW_BODIES: usize = MAX_COUPLING_BODIES;
 
 /// Jacobian block of one row on one body: `J v = lin · v + ang · ω`.
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Default, serde::Serialize, serde::Deserialize)]
 pub struct Jac6 {
     /// Linear part.
     pub lin: Vector3<f64>,
@@ -82,7 +82,7 @@ impl Jac6 {
 }
 
 /// What a row constrains: a position (stabilized by `−βφ/h`) or a velocity (target speed).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
 pub enum RowKind {
     /// Position-level row (locked axes, limits, later contact normals).
     Position,
@@ -94,7 +94,7 @@ pub enum RowKind {
 }
 
 /// Identity of a row that persists from step to step (warm start, reporting).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
 pub enum RowKey {
     /// A row of a joint.
     Joint {
@@ -121,7 +121,7 @@ pub enum RowKey {
 
 /// What persists of a row under its [`RowKey`] (a joint's slot, a coupling, a spring, a contact): the
 /// index state and impulse of the step it was last solved in (warm start, reporting).
-#[derive(Debug, Clone, Copy, Default)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub(crate) struct WarmRow {
     /// `World::steps` after the step that wrote it.
     pub stamp: u64,
@@ -132,7 +132,7 @@ pub(crate) struct WarmRow {
 /// One constraint row (solver side). Body indices are world body indices; a `None` entry of
 /// `bodies` is an unused block (its Jacobian is zero). A non-dynamic body is recognised through its
 /// kind at assembly.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct ConstraintRow {
     /// Persistent identity.
     pub key: RowKey,

@@ -36,7 +36,7 @@
 use super::world::World;
 
 /// Bounds of the watchdog (scene settings `max_speed`, `energy_margin`, `max_joint_error`).
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct WatchdogSettings {
     /// Speed bound `v_max` (m/s) of (W2).
     pub max_speed: f64,
@@ -56,7 +56,7 @@ impl Default for WatchdogSettings {
 }
 
 /// What the watchdog found.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub enum Instability {
     /// (W1): energy above the initial energy plus the inputs' work by more than the margin.
     EnergyGain {
@@ -121,7 +121,7 @@ impl std::fmt::Display for Instability {
 }
 
 /// The watchdog's state over a run.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
 pub struct Watchdog {
     settings: WatchdogSettings,
     e0: f64,

@@ -108,7 +108,7 @@ pub struct Actuator {
 }
 
 /// A fault on an actuator's hydraulics or brake (`faults.rs`).
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Default, serde::Serialize, serde::Deserialize)]
 pub enum ActuatorFault {
     /// Healthy.
     #[default]
@@ -335,7 +335,7 @@ pub struct ScriptEntry {
 }
 
 /// The shape of a scripted ramp (module doc, **Script**).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
 pub enum RampProfile {
     /// `σ(τ) = 3τ² − 2τ³`: the rate starts and ends at zero (the default).
     #[default]
@@ -344,10 +344,10 @@ pub enum RampProfile {
     Linear,
 }
 
-#[derive(Debug, Clone, Copy, PartialEq)]
-struct Ramp {
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+pub(crate) struct Ramp {
     profile: RampProfile,
-    actuator: usize,
+    pub(crate) actuator: usize,
     from: f64,
     to: f64,
     t0: f64,
@@ -358,8 +358,8 @@ struct Ramp {
 #[derive(Debug, Clone, Default)]
 pub struct Script {
     pub(crate) entries: Vec<ScriptEntry>,
-    next: usize,
-    ramps: Vec<Ramp>,
+    pub(crate) next: usize,
+    pub(crate) ramps: Vec<Ramp>,
 }
 
 impl Script {
@@ -490,7 +490,7 @@ pub struct JoystickMap {
     pub axes: Vec<JoyAxis>,
     /// Mapped buttons.
     pub buttons: Vec<JoyButton>,
-    last_buttons: Vec<bool>,
+    pub(crate) last_buttons: Vec<bool>,
 }
 
 impl JoystickMap {

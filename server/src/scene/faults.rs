@@ -23,7 +23,7 @@ use crate::dynamics::{ControlError, JointId, World};
 use crate::signals::{Event, EventKind, EventName, Signals};
 
 /// What a fault does.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub enum FaultAction {
     /// Disable a joint.
     Break {
@@ -57,7 +57,7 @@ pub enum FaultAction {
 }
 
 /// When a fault fires.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub enum FaultTrigger {
     /// At this simulation time (s).
     At(f64),
@@ -68,7 +68,7 @@ pub enum FaultTrigger {
 }
 
 /// A fault, declared or requested.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Fault {
     /// Its name (the event's name).
     pub name: EventName,
@@ -261,6 +261,20 @@ impl Faults {
             }
         }
         Ok(())
+    }
+
+    /// Takes over `list` (a snapshot's, checked by the caller: at most [`MAX_FAULTS`], indices in
+    /// range), with when each fired; the joints of tension-triggered breaks are watched again.
+    pub(crate) fn restore(&mut self, list: &[Fault], signals: &mut Signals) {
+        self.list.clear();
+        self.list.reserve(MAX_FAULTS);
+        for f in list {
+            if let (FaultAction::Break { joint }, FaultTrigger::Tension(_)) = (f.action, f.trigger) {
+                signals.watch_joint(joint);
+            }
+            signals.reserve_events(1);
+            self.list.push(f.clone());
+        }
     }
 
     /// Forgets the faults that fired (a reset: declared ones fire again, requested ones go).

@@ -42,6 +42,7 @@ mod faults;
 mod format;
 mod overrides;
 mod signals;
+mod state;
 mod terrain;
 
 use std::fmt;
@@ -57,6 +58,7 @@ pub use controls::{
 pub use faults::{Fault, FaultAction, FaultError, FaultRequest, FaultTrigger, Faults, MAX_FAULTS};
 pub use overrides::{OverrideError, SceneOverride};
 pub use signals::DEFAULT_TOUCH;
+pub use state::{ActuatorState, SceneState, SceneStateError};
 
 use crate::dynamics::{ControlError, ModelError, StepError, WatchdogSettings, World};
 use crate::signals::{Event, EventKind, EventName, Signals};
@@ -167,6 +169,8 @@ pub struct Scene {
     pub description: String,
     /// Where it came from (path or `builtin:<name>`).
     pub source: String,
+    /// The text it was built from, overrides applied: what a snapshot names it by (`snapshot/`).
+    pub text: String,
     /// Default run length (s).
     pub duration: f64,
     /// The world.

@@ -72,6 +72,26 @@ pub struct ServeConfig {
     pub max_scene_bytes: u64,
     /// Test hook: every scene load waits this long before it reads (slow storage).
     pub slow_load: Option<Duration>,
+    /// Where the `snapshot` control request writes and `restore` reads (`--snapshot-dir`; `None`:
+    /// both are refused).
+    pub snapshot_dir: Option<PathBuf>,
+    /// Keyframes on `keyframes` every this many seconds of simulation time (`--keyframes`; 0:
+    /// only at new scene states and on request).
+    pub keyframes: f64,
+    /// What the server does when the last lockstep controller disappears (`--on-controller-lost`).
+    pub on_controller_lost: ControllerLost,
+}
+
+/// What the server does when a lockstep controller's liveliness token goes away (it crashed, was
+/// killed, or lost its link).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum ControllerLost {
+    /// Stay paused: the world waits for a controller (the default: a rig's plant does not run on
+    /// without the controller under test).
+    #[default]
+    Pause,
+    /// Resume real time: the world goes on, driven by its script or operators.
+    Resume,
 }
 
 impl Default for ServeConfig {
@@ -91,6 +111,9 @@ impl Default for ServeConfig {
             scene_dirs: Vec::new(),
             max_scene_bytes: super::loader::DEFAULT_MAX_SCENE_BYTES,
             slow_load: None,
+            snapshot_dir: None,
+            keyframes: super::journal::DEFAULT_KEYFRAME_EVERY,
+            on_controller_lost: ControllerLost::Pause,
         }
     }
 }

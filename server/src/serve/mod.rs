@@ -6,8 +6,10 @@
 //! |---|---|
 //! | `config.rs` | what the server runs and how, and why it could not start |
 //! | `engine.rs` | transport-free state machine: inputs, deadman, control, frames |
+//! | `journal.rs` | what changed the world before each step, and keyframes, for recordings |
 //! | `loader.rs` | scenes for `load_scene` and `reset`: confined, size-bounded, built off the step thread |
 //! | `transport.rs` | what the loop and its transports share: the inbox, one step's frames, the trait |
+//! | `replay.rs` | recordings read back, compared state by state with the replay |
 //! | `pacing.rs` | real-time pacing and the status line |
 //! | `describe.rs` | the scene description for renderers and consoles |
 //! | `zenoh_io.rs` | Zenoh: publishers, the `cmd/**` subscriber, the `scene` and `control` queryables |
@@ -22,6 +24,9 @@
 //! subscriber's buffer is full; a publisher error is logged (rate-limited) and the next step tries
 //! again. While paused the loop keeps publishing the last state's poses, stats and signals (same
 //! sequence, fresh wall time and input counters) at the step rate; an events frame goes out once.
+//! A lockstep request (`step`, `run_until`) is taken one step per turn of the loop, without
+//! pacing: each step's frames are published before the next step, inputs that arrived meanwhile
+//! apply from the next step, and the reply goes out after the last step's frames.
 //! A `load_scene` or `reset` goes to the loader thread (`loader.rs`); the loop keeps stepping and
 //! swaps the built scene in between two steps, then replies. Sequence numbers never restart: the
 //! new scene's first frames carry the next one (the simulation time restarts at 0). Pacing is in
@@ -33,8 +38,10 @@ pub mod describe;
 pub mod engine;
 #[cfg(feature = "iceoryx2")]
 pub mod iox;
+pub mod journal;
 pub mod loader;
 pub mod pacing;
+pub mod replay;
 pub mod transport;
 pub mod wire;
 #[cfg(feature = "zenoh")]
@@ -44,12 +51,12 @@ pub mod zenoh_refused;
 
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
-use std::time::Instant;
+use std::time::{Duration, Instant};
 
 use pivotsim_msgs as msgs;
 use tracing::info;
 
-pub use config::{MAX_DEADMAN_MS, MAX_STEP_PERIOD, ServeConfig, ServeError, ZenohOptions};
+pub use config::{ControllerLost, MAX_DEADMAN_MS, MAX_STEP_PERIOD, ServeConfig, ServeError, ZenohOptions};
 pub use engine::Engine;
 pub use pacing::{MAX_CATCH_UP, step_period};
 pub use transport::{ErrorThrottle, Frames, INBOX_CAPACITY, Inbound, InboxSender, Transport, inbox};
@@ -88,6 +95,8 @@ pub struct ServeReport {
     pub sim_time: f64,
     /// Input counters at the end.
     pub inputs: msgs::InputHealth,
+    /// What a replay did (all zero when the server replayed nothing).
+    pub replay: engine::ReplayProgress,
 }
 
 /// Runs the server until `shutdown` is set (or `max_steps`); the in-process entry point that
@@ -115,7 +124,22 @@ pub fn run_with(
         config.max_solve_us,
     )?;
     engine.set_load_policy(policy);
+    engine.set_snapshot_dir(config.snapshot_dir.clone());
+    engine.set_keyframe_every(config.keyframes);
     engine.set_paused(config.start_paused);
+    engine.set_on_controller_lost(config.on_controller_lost);
+    run_engine(config, engine, shutdown, on_start)
+}
+
+/// [`run_with`] for an engine already built (a replay's, `replay.rs`): the configuration's
+/// transports, pace and bounds; its scene options are the engine's business.
+pub fn run_engine(
+    config: &ServeConfig,
+    mut engine: Engine,
+    shutdown: Arc<AtomicBool>,
+    on_start: impl FnOnce(&Started),
+) -> Result<ServeReport, ServeError> {
+    let world = msgs::WorldName::new(config.world.clone())?;
     let mut loader = loader::Loader::spawn()
         .map_err(|e| ServeError::Option(format!("cannot start the scene loader thread: {e}")))?;
     if let Some(r) = config.realtime_factor {
@@ -168,7 +192,7 @@ pub fn run_with(
     on_start(&started);
     let report = serve_loop(config, &mut engine, &mut loader, &mut transports, &tx, &rx, &shutdown);
     info!("server stopped after {} steps ({} overruns)", report.steps, report.overruns);
-    Ok(report)
+    Ok(ServeReport { replay: engine.replay_progress().clone(), ..report })
 }
 
 fn serve_loop(
@@ -186,6 +210,8 @@ fn serve_loop(
     let mut counted_drops = 0u64;
     let mut next = Instant::now();
     let mut status = StatusWindow::new(engine);
+    let mut lockstep: Option<Lockstep> = None;
+    let mut last_request = start;
     // The start state's frames, stamped now (the engine built them before any clock mattered).
     engine.encode_frames(pivotsim_link::wall_ns());
     for t in transports.iter_mut() {
@@ -196,7 +222,7 @@ fn serve_loop(
         for t in transports.iter_mut() {
             t.poll(tx);
         }
-        let (mut described, mut republish) = drain_inbox(engine, loader, rx);
+        let (mut described, mut republish) = drain_inbox(engine, loader, rx, &mut lockstep);
         // A scene built off this thread swaps in here, between two steps.
         if let Some(pending) = loader.finished() {
             let (loaded, reply) = pending;
@@ -204,6 +230,10 @@ fn serve_loop(
             reply(engine.finish_load(loaded));
             described |= engine.generation() != generation;
             republish = true;
+        }
+        // Replies a transport sends itself (iceoryx2) leave now, not at its next poll.
+        for t in transports.iter_mut() {
+            t.flush();
         }
         let d = rx.dropped();
         while counted_drops < d {
@@ -218,10 +248,37 @@ fn serve_loop(
                 t.set_description(engine.description());
             }
         }
+        // A lockstep request takes its next step now (the world is paused meanwhile).
+        if let Some((mut job, reply)) = lockstep.take() {
+            let more = engine.lockstep_step(&mut job);
+            for t in transports.iter_mut() {
+                t.publish(engine.frames());
+            }
+            steps += 1;
+            status.record_step(engine);
+            match more {
+                true => lockstep = Some((job, reply)),
+                false => {
+                    reply(engine.finish_steps(&job));
+                    for t in transports.iter_mut() {
+                        t.flush();
+                    }
+                }
+            }
+            if config.max_steps.is_some_and(|m| steps >= m) {
+                break;
+            }
+            // The state was just published: the next re-send, if the world stays paused, is a
+            // period away.
+            next = Instant::now() + paused_period(engine);
+            last_request = Instant::now();
+            continue;
+        }
         let stepped = engine.tick(Instant::now());
         // Paused, the last state is published at the step rate (same sequence), so that consoles
         // keep seeing the world and the input counters.
-        if stepped || republish || engine.is_paused() {
+        let resend = engine.is_paused() && Instant::now() >= next;
+        if stepped || republish || resend {
             if !stepped {
                 engine.encode_frames(pivotsim_link::wall_ns());
             }
@@ -238,15 +295,23 @@ fn serve_loop(
         if config.max_steps.is_some_and(|m| steps >= m) {
             break;
         }
-        // As fast as possible steps without waiting; a paused world is still re-sent at the step
-        // rate (real time), never in a busy loop.
-        let rtf = match config.realtime_factor {
-            Some(rtf) => rtf,
-            None if engine.is_paused() => 1.0,
-            None => {
-                next = Instant::now();
-                continue;
+        // Paused: re-sent at the step rate (real time), and any request wakes the loop at once
+        // (a lockstep controller's round trip never waits for the re-send period).
+        if engine.is_paused() {
+            if resend {
+                next = Instant::now() + paused_period(engine);
             }
+            let polled = transports.iter().any(|t| t.polled());
+            wait_paused(next, last_request, polled, transports, tx, rx, shutdown);
+            if rx.wait(Duration::ZERO) {
+                last_request = Instant::now();
+            }
+            continue;
+        }
+        // As fast as possible steps without waiting.
+        let Some(rtf) = config.realtime_factor else {
+            next = Instant::now();
+            continue;
         };
         if pace(&mut next, rtf, stepped, engine, shutdown) {
             overruns += 1;
@@ -258,16 +323,69 @@ fn serve_loop(
         wall_s: start.elapsed().as_secs_f64(),
         sim_time: engine.scene().world.time(),
         inputs: *engine.health(),
+        replay: engine::ReplayProgress::default(),
     }
 }
 
+/// How long after the last request a paused loop with a polled transport (iceoryx2) keeps polling
+/// at [`FAST_POLL`] before falling back to [`SLOW_POLL`].
+pub const ACTIVE_WINDOW: Duration = Duration::from_millis(100);
+/// The poll interval while a controller is active (a same-host lockstep round trip waits half of
+/// it on average).
+pub const FAST_POLL: Duration = Duration::from_micros(50);
+/// The poll interval of a quiet paused loop.
+pub const SLOW_POLL: Duration = Duration::from_millis(2);
+
+/// The re-send period of a paused world: the step period in real time.
+fn paused_period(engine: &Engine) -> Duration {
+    step_period(engine.scene().world.settings().timestep, 1.0).unwrap_or(config::MAX_STEP_PERIOD)
+}
+
+/// A paused loop's wait: until `deadline` (the next re-send) or an item in the inbox, whichever
+/// comes first. Transports that push (Zenoh) wake it through the inbox; polled ones (iceoryx2)
+/// are polled every [`FAST_POLL`] within [`ACTIVE_WINDOW`] of the last request, else every
+/// [`SLOW_POLL`].
+fn wait_paused(
+    deadline: Instant,
+    last_request: Instant,
+    polled: bool,
+    transports: &mut [Box<dyn Transport>],
+    tx: &InboxSender,
+    rx: &pivotsim_link::Inbox<Inbound>,
+    shutdown: &AtomicBool,
+) {
+    // Bounded: a period is at most MAX_STEP_PERIOD, and every slice waits at least FAST_POLL.
+    let max_slices = config::MAX_STEP_PERIOD.as_micros() / FAST_POLL.as_micros() + 1;
+    for _ in 0..max_slices {
+        let now = Instant::now();
+        if now >= deadline || shutdown.load(Ordering::Relaxed) {
+            return;
+        }
+        let mut slice = (deadline - now).min(pacing::MAX_SLEEP);
+        if polled {
+            for t in transports.iter_mut() {
+                t.poll(tx);
+            }
+            let poll = if now < last_request + ACTIVE_WINDOW { FAST_POLL } else { SLOW_POLL };
+            slice = slice.min(poll);
+        }
+        if rx.wait(slice) {
+            return;
+        }
+    }
+}
+
+/// A lockstep request under way and where its reply goes.
+type Lockstep = (engine::StepJob, Box<dyn FnOnce(Vec<u8>) + Send>);
+
 /// Hands every waiting input and control request to the engine (a scene load to the loader
-/// thread, or `busy` while one is under way); returns whether a request changed the scene
-/// description and whether one changed what the frames show.
+/// thread, a lockstep request to `lockstep`, or `busy` while one of either is under way); returns
+/// whether a request changed the scene description and whether one changed what the frames show.
 fn drain_inbox(
     engine: &mut Engine,
     loader: &mut loader::Loader,
     rx: &pivotsim_link::Inbox<Inbound>,
+    lockstep: &mut Option<Lockstep>,
 ) -> (bool, bool) {
     let mut described = false;
     let mut republish = false;
@@ -276,10 +394,20 @@ fn drain_inbox(
             Inbound::Input { topic, bytes } => {
                 let _ = engine.handle_input(topic, &bytes, Instant::now());
             }
+            Inbound::Controller { id, present } => {
+                engine.controller(&id, present);
+                republish = true;
+            }
             Inbound::Control { bytes, reply } => {
                 let (generation, seq) = (engine.generation(), engine.sequence());
                 match engine.begin_control(&bytes) {
                     engine::ControlStep::Reply(r) => reply(r),
+                    engine::ControlStep::Steps(job) if lockstep.is_some() => reply(Engine::error_reply(
+                        job.id,
+                        msgs::ControlErrorCode::Busy,
+                        "another lockstep request is under way",
+                    )),
+                    engine::ControlStep::Steps(job) => *lockstep = Some((job, reply)),
                     engine::ControlStep::Load(job) => {
                         if let Err((job, reply)) = loader.submit(job, reply) {
                             reply(Engine::error_reply(

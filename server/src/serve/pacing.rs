@@ -16,7 +16,7 @@ use super::transport::Transport;
 pub const MAX_CATCH_UP: u32 = 4;
 
 /// Longest single sleep of the loop: Ctrl-C is seen within this even at a slow pace.
-const MAX_SLEEP: Duration = Duration::from_millis(100);
+pub(crate) const MAX_SLEEP: Duration = Duration::from_millis(100);
 
 /// Waits until step `next` (advanced by one period at real-time factor `rtf`) is due; when it is
 /// already late, counts an overrun if a step ran (returns `true`) and drops a backlog of more than

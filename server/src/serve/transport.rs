@@ -17,6 +17,13 @@ pub enum Inbound {
         /// The frame.
         bytes: Vec<u8>,
     },
+    /// A lockstep controller's liveliness token appeared (`present`) or went away.
+    Controller {
+        /// Its id (the token's last key segment).
+        id: String,
+        /// Whether it is there.
+        present: bool,
+    },
     /// A control request and where its reply goes.
     Control {
         /// The request frame.
@@ -31,6 +38,7 @@ impl std::fmt::Debug for Inbound {
         match self {
             Inbound::Input { topic, bytes } => write!(f, "Input({topic:?}, {} bytes)", bytes.len()),
             Inbound::Control { bytes, .. } => write!(f, "Control({} bytes)", bytes.len()),
+            Inbound::Controller { id, present } => write!(f, "Controller({id}, {present})"),
         }
     }
 }
@@ -54,7 +62,7 @@ impl InboxSender {
                 }
                 false
             }
-            Err(Inbound::Input { .. }) => false,
+            Err(Inbound::Input { .. } | Inbound::Controller { .. }) => false,
         }
     }
 }
@@ -76,14 +84,27 @@ pub struct Frames<'a> {
     pub signals: &'a [u8],
     /// Events (`events`); empty when the step had none: nothing is published.
     pub events: &'a [u8],
+    /// Applied frames (`applied`, Zenoh only): none when the step applied nothing.
+    pub applied: &'a [Vec<u8>],
+    /// Keyframe (`keyframes`, Zenoh only); empty when none was due.
+    pub keyframe: &'a [u8],
 }
 
 /// A transport as the loop sees it.
 pub trait Transport {
     /// Publishes one step's frames; never blocks on subscribers.
     fn publish(&mut self, frames: Frames<'_>);
-    /// Hands over inputs received since the last call (transports that poll).
+    /// Hands over inputs and control requests received since the last call (transports that
+    /// poll), and sends the replies the loop produced since.
     fn poll(&mut self, _inbox: &InboxSender) {}
+    /// Sends the control replies the loop produced since the last call, when the transport sends
+    /// them itself rather than in the reply closure (iceoryx2); the loop calls it after answering.
+    fn flush(&mut self) {}
+    /// Whether inputs reach the loop only through [`Transport::poll`] (nothing wakes the loop
+    /// for them): a paused loop then polls at short intervals while a controller is active.
+    fn polled(&self) -> bool {
+        false
+    }
     /// Inputs refused before they reached the loop since the last call (Zenoh's access control);
     /// the loop counts them as `other`. Reading it allocates nothing.
     fn take_refused(&mut self) -> u64 {

@@ -172,26 +172,18 @@ pub(crate) fn fill_signals(
     }
 }
 
-/// Fills `out` with `earlier` events (drained; the steps of a `step N` request before its last)
-/// and then the last step's, at most [`msgs::MAX_EVENTS`] in all, earliest first.
-pub(crate) fn fill_events(
-    signals: &Signals,
-    sequence: u64,
-    sim_time: f64,
-    earlier: &mut Vec<msgs::EventRecord>,
-    out: &mut msgs::EventsFrame,
-) {
+/// Fills `out` with the last step's events, at most [`msgs::MAX_EVENTS`], earliest first.
+pub(crate) fn fill_events(signals: &Signals, sequence: u64, sim_time: f64, out: &mut msgs::EventsFrame) {
     out.sequence = sequence;
     out.sim_time = sim_time;
     out.events_total = signals.events_total();
     out.events.clear();
-    out.events.extend(earlier.drain(..).take(msgs::MAX_EVENTS));
     push_events(signals, &mut out.events);
 }
 
 /// Appends the last step's events as wire records to `out`, up to [`msgs::MAX_EVENTS`] in all
 /// (an event whose name is not a wire name is left out).
-pub(crate) fn push_events(signals: &Signals, out: &mut Vec<msgs::EventRecord>) {
+fn push_events(signals: &Signals, out: &mut Vec<msgs::EventRecord>) {
     for e in signals.events() {
         if out.len() >= msgs::MAX_EVENTS {
             break;

@@ -6,6 +6,12 @@
 //! answered by the loop thread). With access control in the Zenoh configuration, the puts its
 //! rules refuse are counted too (`zenoh_refused.rs`).
 //!
+//! Lockstep controllers hold the liveliness token `pivotsim/<world>/controller/<id>` while they
+//! run; a liveliness subscriber (with history, so controllers already there count) turns each
+//! token's appearance and disappearance into [`Inbound::Controller`]. Zenoh undeclares the token
+//! of a controller that exits, is killed or whose link closes (the peer's TCP connection ends);
+//! one whose host vanishes without closing the link goes when the session lease expires.
+//!
 //! Events (thresholds raised and cleared, faults, refused faults) are not frames: each is sent
 //! once, and a lost one is lost for good. With *drop*, the events frame — the fourth message of a
 //! step's burst, on the same priority queue as the three frames before it — was the one Zenoh
@@ -81,26 +87,40 @@ fn claim_world(session: &zenoh::Session, world: &msgs::WorldName) -> Result<Live
 /// transmit queue of their own that the frames never fill.
 pub const EVENTS_PRIORITY: Priority = Priority::DataHigh;
 
-/// Events frames handed to the events thread and not yet sent before the loop drops one.
+/// The priority of the journal's publishers (`applied`, `keyframes`): below the frames', so that
+/// a keyframe of some hundred kilobytes never delays a pose frame; blocking, like events.
+pub const JOURNAL_PRIORITY: Priority = Priority::DataLow;
+
+/// Frames handed to the reliable thread and not yet sent before the loop drops one.
 pub const EVENTS_BACKLOG: usize = 256;
 
-/// The events publisher's thread: sends every frame it is handed, blocking on congestion.
+/// What the reliable thread publishes: events, applied frames, keyframes (index into its
+/// publishers).
+#[derive(Debug, Clone, Copy)]
+enum Reliable {
+    Events = 0,
+    Applied = 1,
+    Keyframes = 2,
+}
+
+/// The thread of the publishers whose frames must not be lost (events and the journal): sends
+/// every frame it is handed, in order per publisher, blocking on congestion.
 struct EventsSender {
-    tx: Option<SyncSender<Vec<u8>>>,
+    tx: Option<SyncSender<(Reliable, Vec<u8>)>>,
     thread: Option<JoinHandle<()>>,
     throttle: ErrorThrottle,
 }
 
 impl EventsSender {
-    fn spawn(publisher: Publisher<'static>) -> Result<EventsSender, ServeError> {
-        let (tx, rx) = sync_channel::<Vec<u8>>(EVENTS_BACKLOG);
+    fn spawn(publishers: [Publisher<'static>; 3]) -> Result<EventsSender, ServeError> {
+        let (tx, rx) = sync_channel::<(Reliable, Vec<u8>)>(EVENTS_BACKLOG);
         let thread = std::thread::Builder::new()
             .name("zenoh-events".into())
             .spawn(move || {
                 let mut throttle = ErrorThrottle::default();
-                for frame in rx {
-                    if let Err(e) = publisher.put(frame).wait() {
-                        throttle.fail("zenoh events", &e);
+                for (to, frame) in rx {
+                    if let Err(e) = publishers[to as usize].put(frame).wait() {
+                        throttle.fail("zenoh events/journal", &e);
                     }
                 }
             })
@@ -109,9 +129,9 @@ impl EventsSender {
     }
 
     /// Hands a frame to the thread without waiting; a full backlog drops it (counted).
-    fn send(&mut self, frame: &[u8]) {
+    fn send(&mut self, to: Reliable, frame: &[u8]) {
         let Some(tx) = &self.tx else { return };
-        match tx.try_send(frame.to_vec()) {
+        match tx.try_send((to, frame.to_vec())) {
             Ok(()) => {}
             Err(TrySendError::Full(_)) => self
                 .throttle
@@ -147,6 +167,7 @@ pub struct ZenohTransport {
     _inputs: Subscriber<()>,
     _scene: Queryable<()>,
     _control: Queryable<()>,
+    _controllers: Subscriber<()>,
     _token: LivelinessToken,
     description: Arc<RwLock<Vec<u8>>>,
     throttle: ErrorThrottle,
@@ -184,15 +205,20 @@ impl ZenohTransport {
         let poses = publisher(msgs::Topic::Poses)?;
         let stats = publisher(msgs::Topic::Stats)?;
         let signals = publisher(msgs::Topic::Signals)?;
-        let events = EventsSender::spawn(
+        let reliable = |topic: msgs::Topic, priority: Priority| {
             session
-                .declare_publisher(world.key(msgs::Topic::Events))
+                .declare_publisher(world.key(topic))
                 .congestion_control(CongestionControl::Block)
-                .priority(EVENTS_PRIORITY)
+                .priority(priority)
                 .express(true)
                 .wait()
-                .map_err(err)?,
-        )?;
+                .map_err(err)
+        };
+        let events = EventsSender::spawn([
+            reliable(msgs::Topic::Events, EVENTS_PRIORITY)?,
+            reliable(msgs::Topic::Applied, JOURNAL_PRIORITY)?,
+            reliable(msgs::Topic::Keyframes, JOURNAL_PRIORITY)?,
+        ])?;
         let tx = inbox.clone();
         let inputs = session
             .declare_subscriber(msgs::inputs_wildcard(world))
@@ -220,6 +246,21 @@ impl ZenohTransport {
             .callback(move |q| {
                 let bytes = desc.read().map(|d| d.clone()).unwrap_or_default();
                 let _ = q.reply(scene_key.clone(), bytes).wait();
+            })
+            .wait()
+            .map_err(err)?;
+        let tx = inbox.clone();
+        let controllers = session
+            .liveliness()
+            .declare_subscriber(world.controller_tokens())
+            .history(true)
+            .callback(move |sample| {
+                let key = sample.key_expr().as_str();
+                let id = key.rsplit('/').next().unwrap_or_default().to_string();
+                let present = sample.kind() == zenoh::sample::SampleKind::Put;
+                if !tx.offer(Inbound::Controller { id, present }) {
+                    tracing::warn!("zenoh: controller token {key} changed with the inbox full (not seen)");
+                }
             })
             .wait()
             .map_err(err)?;
@@ -252,6 +293,7 @@ impl ZenohTransport {
             _inputs: inputs,
             _scene: scene,
             _control: control,
+            _controllers: controllers,
             _token: token,
             description,
             throttle: ErrorThrottle::default(),
@@ -274,7 +316,13 @@ impl Transport for ZenohTransport {
             self.throttle.fail("zenoh signals", &e);
         }
         if !frames.events.is_empty() {
-            self.events.send(frames.events);
+            self.events.send(Reliable::Events, frames.events);
+        }
+        for a in frames.applied {
+            self.events.send(Reliable::Applied, a);
+        }
+        if !frames.keyframe.is_empty() {
+            self.events.send(Reliable::Keyframes, frames.keyframe);
         }
     }
 
@@ -298,7 +346,7 @@ impl Transport for ZenohTransport {
             d.push_str(&format!(" connecting to {}", self.connect.join(", ")));
         }
         d.push_str(&format!(
-            ": keys {}/{{poses, stats, signals, events, cmd/*, scene, control}}",
+            ": keys {}/{{poses, stats, signals, events, applied, keyframes, cmd/*, scene, control}}",
             self.prefix
         ));
         d

@@ -34,7 +34,7 @@ pub struct Threshold {
 }
 
 /// What happened.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub enum EventKind {
     /// A threshold was crossed.
     Raised,
@@ -47,7 +47,8 @@ pub enum EventKind {
 }
 
 /// An event name stored inline (at most 32 bytes: no allocation per event).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
+#[serde(into = "String", from = "String")]
 pub struct EventName {
     bytes: [u8; 32],
     len: u8,
@@ -90,7 +91,7 @@ impl EventName {
 }
 
 /// One event of a step.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Event {
     /// What.
     pub kind: EventKind,
@@ -102,4 +103,17 @@ pub struct Event {
     pub value: f64,
     /// The threshold's level (a fault's limit; 0 when there is none).
     pub level: f64,
+}
+
+/// A name read back (a snapshot) passes through [`EventName::new`]'s rules again.
+impl From<String> for EventName {
+    fn from(s: String) -> Self {
+        EventName::new(&s)
+    }
+}
+
+impl From<EventName> for String {
+    fn from(n: EventName) -> Self {
+        n.as_str().to_string()
+    }
 }

@@ -63,9 +63,11 @@ mod eval;
 mod event;
 mod events;
 mod sensor;
+mod state;
 mod support;
 
 pub use eval::{ContactState, ContactStateKind, MAX_CONTACT_RECORDS, MAX_QUEUED_EVENTS, Signals};
 pub use event::{Event, EventKind, EventName, Threshold, ThresholdDir};
 pub use sensor::{BodySet, Sensor, SensorKind};
+pub use state::{SignalsState, SignalsStateError};
 pub use support::{SupportPolygon, TippingMargin};

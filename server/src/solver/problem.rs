@@ -585,7 +585,7 @@ fn check_symmetric(i: usize, j: usize, aij: f64, aji: f64, aii: f64, ajj: f64) -
 }
 
 /// Which side of its box a variable sits on in an index set (paper eq. 4).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default, serde::Serialize, serde::Deserialize)]
 #[repr(u8)]
 pub enum IndexState {
     /// `i ∈ F`: strictly inside its bounds, `w_i = 0`.

@@ -34,8 +34,10 @@
 //! | `report.rs` | the summary, `bench.md` and the `bench.json` document |
 //! | `plots.rs` | the SVG plots |
 //! | `sweep.rs` | `--sweep N`, alone: the generated-island sweep at scale (`sweep.json`) |
+//! | `hard.rs` | `--hard`, alone: the hardest warm solves of the shipped scenes beside ODE's column (`hard.md`) |
 
 mod corpus;
+pub mod hard;
 mod kernels;
 mod plan;
 mod plots;
@@ -61,6 +63,7 @@ use plots::{plot_fig4, plot_solve_times};
 use problems::{ProblemResult, run_problem};
 use report::{Report, Summary, markdown, summarize, summary_text};
 pub use report::{build_kind, cpu_name};
+pub use timing::median;
 
 /// What to run and where to write it.
 #[derive(Debug, Clone)]

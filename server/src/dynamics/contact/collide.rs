@@ -50,7 +50,7 @@ use crate::dynamics::body::{BodyKind, RigidBody};
 use crate::dynamics::joint::Joint;
 
 /// One contact point of the current step (world frame).
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub(crate) struct ContactPoint {
     /// Colliders A and B.
     pub ca: u32,
@@ -84,6 +84,77 @@ struct PairCache {
     /// Terrain pairs: manifolds of triangles left behind, for reuse.
     spare: Vec<Manifold>,
     stamp: u64,
+}
+
+/// What of the narrow phase carries from one update to the next: the pairs' manifolds (parry seeds
+/// a query with the manifold's last normal, so they shape the next points to the last bit) and the
+/// points of the last update (reported between steps). Pairs sorted by key, so that equal states
+/// encode to equal bytes. The broad phase's sorted order is not part of it: its pairs come out
+/// sorted whatever order it kept.
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
+pub(crate) struct NarrowState {
+    stamp: u64,
+    pairs: Vec<((u32, u32, u32, u32), PairState)>,
+    points: Vec<ContactPoint>,
+}
+
+/// A [`PairCache`] without its composite-shape workspace (never used: terrains are queried triangle
+/// by triangle here, compounds part by part).
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
+struct PairState {
+    manifolds: Vec<Manifold>,
+    triangles: Vec<(u32, bool)>,
+    spare: Vec<Manifold>,
+    stamp: u64,
+}
+
+/// A pair whose parry workspace holds state the snapshot cannot carry.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) struct UnsupportedPair(pub (u32, u32));
+
+impl NarrowPhase {
+    /// The state that carries over (see [`NarrowState`]).
+    pub(crate) fn state(&self) -> Result<NarrowState, UnsupportedPair> {
+        let mut pairs = Vec::with_capacity(self.pairs.len());
+        for (&key, c) in &self.pairs {
+            if c.workspace.is_some() {
+                return Err(UnsupportedPair((key.0, key.1)));
+            }
+            let state = PairState {
+                manifolds: c.manifolds.clone(),
+                triangles: c.triangles.clone(),
+                spare: c.spare.clone(),
+                stamp: c.stamp,
+            };
+            pairs.push((key, state));
+        }
+        pairs.sort_unstable_by_key(|p| p.0);
+        Ok(NarrowState { stamp: self.stamp, pairs, points: self.points.clone() })
+    }
+
+    /// Takes over `state`: the caches and points as they were when it was taken.
+    pub(crate) fn restore(&mut self, state: &NarrowState) {
+        self.stamp = state.stamp;
+        self.pairs.clear();
+        for (key, p) in &state.pairs {
+            let cache = PairCache {
+                manifolds: p.manifolds.clone(),
+                workspace: None,
+                triangles: p.triangles.clone(),
+                spare: p.spare.clone(),
+                stamp: p.stamp,
+            };
+            self.pairs.insert(*key, cache);
+        }
+        self.points.clone_from(&state.points);
+    }
+
+    /// Colliders a restored state may name (all of a pair's indices below it).
+    pub(crate) fn state_colliders(state: &NarrowState) -> usize {
+        let pairs = state.pairs.iter().map(|(k, _)| k.0.max(k.1) as usize + 1);
+        let points = state.points.iter().map(|p| p.ca.max(p.cb) as usize + 1);
+        pairs.chain(points).max().unwrap_or(0)
+    }
 }
 
 impl std::fmt::Debug for NarrowPhase {

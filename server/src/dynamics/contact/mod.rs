@@ -130,6 +130,7 @@ mod convert;
 mod material;
 mod rows;
 
+pub(crate) use collide::{NarrowPhase, NarrowState};
 pub(crate) use rows::orthogonal;
 mod shape;
 pub mod terrain;

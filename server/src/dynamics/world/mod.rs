@@ -10,8 +10,10 @@
 mod colliders;
 mod control;
 mod query;
+mod state;
 
 pub use query::{JointFramesWorld, JointReaction};
+pub use state::{BodyState, JointState, WorldState, WorldStateError};
 
 use std::collections::HashMap;
 

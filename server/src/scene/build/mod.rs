@@ -170,6 +170,7 @@ pub(crate) fn build(file: &str, text: &str) -> R<Scene> {
         name: sec.name.clone(),
         description: sec.description.clone(),
         source: file.to_string(),
+        text: text.to_string(),
         duration,
         world,
         controls,

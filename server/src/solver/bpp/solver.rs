@@ -116,6 +116,29 @@ impl Solver {
         self.out_of_time
     }
 
+    /// Forgets what the cost model learned from this solver's earlier solves (the recent GMRES
+    /// iterations per coupled point and the share of rejected direct points, `coupled.rs`), which
+    /// decide between GMRES and the LU: the next solve is then the one a new solver would do, bit
+    /// for bit, with the buffers kept (`solve --repeats` times the same solve this way). A
+    /// simulation keeps the memory from step to step: a replay from a snapshot is bit-exact only
+    /// if the snapshot is taken where the memory is too (see [`Solver::cost_memory`]).
+    pub fn forget_history(&mut self) {
+        self.cpl.gmres_iters = 0.0;
+        self.cpl.lu_rejects = 0.0;
+    }
+
+    /// The cost model's memory of earlier solves: (recent GMRES iterations per coupled point,
+    /// recent share of rejected direct points). It decides the method of later coupled points,
+    /// so it is part of the state a bit-exact replay restores ([`Solver::set_cost_memory`]).
+    pub fn cost_memory(&self) -> (f64, f64) {
+        (self.cpl.gmres_iters, self.cpl.lu_rejects)
+    }
+
+    /// Restores the memory [`Solver::cost_memory`] returned.
+    pub fn set_cost_memory(&mut self, memory: (f64, f64)) {
+        (self.cpl.gmres_iters, self.cpl.lu_rejects) = memory;
+    }
+
     /// Statistics of the last solve.
     pub fn stats(&self) -> &SolveStats {
         &self.stats
