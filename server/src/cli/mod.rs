@@ -21,3 +21,15 @@ pub mod run;
 pub mod serve;
 pub mod solve;
 pub mod values;
+
+/// Logs to stderr at `info` (Zenoh at `warn`) unless `RUST_LOG` says otherwise; for the commands
+/// that serve (`serve`, `replay`). A second call does nothing.
+pub fn init_tracing() {
+    let _ = tracing_subscriber::fmt()
+        .with_env_filter(
+            tracing_subscriber::EnvFilter::try_from_default_env()
+                .unwrap_or_else(|_| "info,zenoh=warn".into()),
+        )
+        .with_writer(std::io::stderr)
+        .try_init();
+}
