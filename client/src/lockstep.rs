@@ -33,12 +33,12 @@ use pivotsim_msgs as msgs;
 use pivotsim_msgs::Topic;
 use zenoh::Wait;
 
+use crate::common::Common;
 use crate::control::fresh_id;
 use crate::control_link::{IoxControl, NAP, SPIN};
 use crate::net::{Inbox, IoxInputs, TransportKind, ZenohLink, inbox, now_ns, wait_iox_subscriber};
-use crate::util::{percentile, random_u32, scene_best_effort};
-use crate::common::Common;
 use crate::stop::{interrupted, secs};
+use crate::util::{percentile, random_u32, scene_best_effort};
 
 /// `lockstep` options.
 #[derive(Debug, clap::Args)]
@@ -612,7 +612,9 @@ mod tests {
         // Angles: the short way round.
         assert!((plan.command(&t.a, 0.5 + std::f64::consts::TAU) - 0.0).abs() < 1e-12);
         plan.limits = Some([-0.1, 0.1]);
-        assert_eq!(plan.command(&t.a, -10.0), 0.1);
+        // Errors of 1.5 rad either way (within ±π, so not wrapped): 2 · 1.5 clamped.
+        assert_eq!(plan.command(&t.a, -1.0), 0.1);
+        assert_eq!(plan.command(&t.a, 2.0), -0.1);
         assert_eq!(plan.command(&t.a, f64::NAN), 0.0);
     }
 }

@@ -21,3 +21,17 @@ pub mod run;
 pub mod serve;
 pub mod solve;
 pub mod values;
+
+/// Logs to stderr at `info` (Zenoh at `warn`) unless `RUST_LOG` says otherwise; for the commands
+/// that serve (`serve`, `replay`). A second call does nothing.
+pub fn init_tracing() {
+    let _ = tracing_subscriber::fmt()
+        .with_env_filter(
+            tracing_subscriber::EnvFilter::try_from_default_env()
+                .unwrap_or_else(|_| "info,zenoh=warn".into()),
+        )
+        .with_writer(std::io::stderr)
+        // Colours only on a terminal: a log file or a pipe gets plain text.
+        .with_ansi(std::io::IsTerminal::is_terminal(&std::io::stderr()))
+        .try_init();
+}

@@ -43,13 +43,7 @@ pub struct ReplayArgs {
 
 /// Runs `replay`.
 pub fn replay(args: ReplayArgs) -> anyhow::Result<()> {
-    let _ = tracing_subscriber::fmt()
-        .with_env_filter(
-            tracing_subscriber::EnvFilter::try_from_default_env()
-                .unwrap_or_else(|_| "info,zenoh=warn".into()),
-        )
-        .with_writer(std::io::stderr)
-        .try_init();
+    super::init_tracing();
     if !args.serve.set.is_empty() {
         bail!("--set does not apply to a replay: the recording carries its scene");
     }

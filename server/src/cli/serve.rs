@@ -136,15 +136,7 @@ impl ServeArgs {
 
 /// Runs `serve` until Ctrl-C (or `--steps`).
 pub fn serve(args: ServeArgs) -> anyhow::Result<()> {
-    let _ = tracing_subscriber::fmt()
-        .with_env_filter(
-            tracing_subscriber::EnvFilter::try_from_default_env()
-                .unwrap_or_else(|_| "info,zenoh=warn".into()),
-        )
-        .with_writer(std::io::stderr)
-        // Colours only on a terminal: a log file or a pipe gets plain text.
-        .with_ansi(std::io::IsTerminal::is_terminal(&std::io::stderr()))
-        .try_init();
+    super::init_tracing();
     let config = args.config();
     let shutdown = Arc::new(AtomicBool::new(false));
     let flag = shutdown.clone();

@@ -23,7 +23,7 @@
 //!
 //! **Controllers.** A lockstep controller on this host names its iceoryx2 node with its controller
 //! token, `pivotsim/<world>/controller/<id>` (the Zenoh liveliness key). Every
-//! [`CONTROLLER_SCAN`] the transport lists this host's nodes ([`ControllerWatch`]): a node with
+//! [`CONTROLLER_SCAN`] the transport lists this host's nodes (`ControllerWatch`): a node with
 //! such a name that appears is a controller that joined, one that is gone — it exited, or its
 //! process died (iceoryx2 tells a dead node by its released monitoring lock; the scan also removes
 //! the dead node's stale resources) — a controller lost; both reach the loop as
