@@ -373,7 +373,7 @@ fn a_client_offering_only_websocket_v1_connects() {
     view.wait_for_stderr("on ws://127.0.0.1:", Duration::from_secs(30));
     let port = printed_port(&view.stderr_so_far());
 
-    let refused = offer(port, "foxglove.websocket.v2").err().expect("an unknown subprotocol is refused");
+    let refused = offer(port, "foxglove.websocket.v2").expect_err("an unknown subprotocol is refused");
     assert_eq!(refused.0, 400);
     assert!(
         refused.1.contains("foxglove.websocket.v1") && refused.1.contains("foxglove.sdk.v1"),

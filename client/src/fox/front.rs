@@ -154,6 +154,8 @@ async fn accept(listener: TcpListener, upstream: SocketAddr, delivery: Arc<Deliv
 }
 
 /// The handshake with a client: the subprotocol answered and the one to ask of the SDK, or a 400.
+// The error type is tungstenite's handshake callback's (`ErrorResponse` by value), not ours.
+#[allow(clippy::result_large_err)]
 fn handshake(req: &Request, res: Response) -> Result<(Response, &'static str), ErrorResponse> {
     let values: Vec<&str> =
         req.headers().get_all("sec-websocket-protocol").iter().filter_map(|v| v.to_str().ok()).collect();
@@ -225,6 +227,8 @@ fn message_data_subscription(b: &[u8]) -> Option<u32> {
     }
 }
 
+// The handshake closure returns tungstenite's `ErrorResponse` by value (its callback's type).
+#[allow(clippy::result_large_err)]
 async fn relay(stream: TcpStream, upstream: SocketAddr, delivery: Arc<Delivery>) -> Result<()> {
     let mut asked = SDK_V1;
     let down = tokio_tungstenite::accept_hdr_async(stream, |req: &Request, res: Response| {
