@@ -60,6 +60,8 @@ pub struct Inbox {
     pub signals_frames: AtomicU64,
     /// Signals frames replaced before they were taken.
     pub signals_frames_skipped: AtomicU64,
+    /// Stats frames received.
+    pub stats_frames: AtomicU64,
     /// Events frames received.
     pub events_frames: AtomicU64,
     /// Events frames dropped on a full queue.
@@ -70,6 +72,47 @@ impl Inbox {
     fn put(&self, f: impl FnOnce(&mut Latest)) {
         if let Ok(mut l) = self.latest.lock() {
             f(&mut l);
+        }
+        self.ready.notify_all();
+    }
+
+    /// A frame of `topic` arrived: the newest pose, stats or signals frame replaces the one not
+    /// yet taken (counted as skipped for poses and signals); an events frame joins the queue, or
+    /// is dropped and counted when [`EVENTS_QUEUE`] wait already. Other topics are ignored.
+    pub fn receive(&self, topic: msgs::Topic, bytes: Vec<u8>) {
+        let counter = match topic {
+            msgs::Topic::Poses => &self.pose_frames,
+            msgs::Topic::Signals => &self.signals_frames,
+            msgs::Topic::Events => &self.events_frames,
+            msgs::Topic::Stats => &self.stats_frames,
+            _ => return,
+        };
+        counter.fetch_add(1, Ordering::Relaxed);
+        let now = Instant::now();
+        let lost = {
+            let Ok(mut l) = self.latest.lock() else { return };
+            let lost = match topic {
+                msgs::Topic::Poses => l.poses.replace(bytes).is_some().then_some(&self.pose_frames_skipped),
+                msgs::Topic::Signals => {
+                    l.signals.replace(bytes).is_some().then_some(&self.signals_frames_skipped)
+                }
+                msgs::Topic::Stats => {
+                    l.stats = Some(bytes);
+                    None
+                }
+                _ if l.events.len() < EVENTS_QUEUE => {
+                    l.events.push_back(bytes);
+                    None
+                }
+                _ => Some(&self.events_frames_dropped),
+            };
+            if topic != msgs::Topic::Events {
+                l.last_frame = Some(now);
+            }
+            lost
+        };
+        if let Some(c) = lost {
+            c.fetch_add(1, Ordering::Relaxed);
         }
         self.ready.notify_all();
     }
@@ -105,10 +148,8 @@ pub struct ZenohLink {
     world: msgs::WorldName,
     /// What arrived.
     pub inbox: Arc<Inbox>,
-    _poses: Subscriber<()>,
-    _stats: Subscriber<()>,
-    _signals: Subscriber<()>,
-    _events: Subscriber<()>,
+    /// Poses, stats, signals and events, each feeding [`Inbox::receive`].
+    _subscribers: [Subscriber<()>; 4],
     joystick: Publisher<'static>,
 }
 
@@ -124,83 +165,27 @@ impl ZenohLink {
         let err = |e: zenoh::Error| anyhow!("zenoh: {e}");
         let session = zenoh::open(config).wait().map_err(err)?;
         let inbox = Arc::new(Inbox::default());
-        let i = inbox.clone();
-        let poses = session
-            .declare_subscriber(world.key(msgs::Topic::Poses))
-            .callback(move |s| {
-                let bytes = s.payload().to_bytes().into_owned();
-                i.pose_frames.fetch_add(1, Ordering::Relaxed);
-                let ii = i.clone();
-                i.put(|l| {
-                    if l.poses.replace(bytes).is_some() {
-                        ii.pose_frames_skipped.fetch_add(1, Ordering::Relaxed);
-                    }
-                    l.last_frame = Some(Instant::now());
-                });
-            })
-            .wait()
-            .map_err(err)?;
-        let i = inbox.clone();
-        let stats = session
-            .declare_subscriber(world.key(msgs::Topic::Stats))
-            .callback(move |s| {
-                let bytes = s.payload().to_bytes().into_owned();
-                i.put(|l| {
-                    l.stats = Some(bytes);
-                    l.last_frame = Some(Instant::now());
-                });
-            })
-            .wait()
-            .map_err(err)?;
-        let i = inbox.clone();
-        let signals = session
-            .declare_subscriber(world.key(msgs::Topic::Signals))
-            .callback(move |s| {
-                let bytes = s.payload().to_bytes().into_owned();
-                i.signals_frames.fetch_add(1, Ordering::Relaxed);
-                let ii = i.clone();
-                i.put(|l| {
-                    if l.signals.replace(bytes).is_some() {
-                        ii.signals_frames_skipped.fetch_add(1, Ordering::Relaxed);
-                    }
-                    l.last_frame = Some(Instant::now());
-                });
-            })
-            .wait()
-            .map_err(err)?;
-        let i = inbox.clone();
-        let events = session
-            .declare_subscriber(world.key(msgs::Topic::Events))
-            .callback(move |s| {
-                let bytes = s.payload().to_bytes().into_owned();
-                i.events_frames.fetch_add(1, Ordering::Relaxed);
-                let ii = i.clone();
-                i.put(|l| {
-                    if l.events.len() < EVENTS_QUEUE {
-                        l.events.push_back(bytes);
-                    } else {
-                        ii.events_frames_dropped.fetch_add(1, Ordering::Relaxed);
-                    }
-                });
-            })
-            .wait()
-            .map_err(err)?;
+        let subscribe = |topic: msgs::Topic| {
+            let i = inbox.clone();
+            session
+                .declare_subscriber(world.key(topic))
+                .callback(move |s| i.receive(topic, s.payload().to_bytes().into_owned()))
+                .wait()
+                .map_err(err)
+        };
+        let subscribers = [
+            subscribe(msgs::Topic::Poses)?,
+            subscribe(msgs::Topic::Stats)?,
+            subscribe(msgs::Topic::Signals)?,
+            subscribe(msgs::Topic::Events)?,
+        ];
         let joystick = session
             .declare_publisher(world.key(msgs::Topic::Joystick))
             .congestion_control(CongestionControl::Drop)
             .express(true)
             .wait()
             .map_err(err)?;
-        Ok(ZenohLink {
-            session,
-            world,
-            inbox,
-            _poses: poses,
-            _stats: stats,
-            _signals: signals,
-            _events: events,
-            joystick,
-        })
+        Ok(ZenohLink { session, world, inbox, _subscribers: subscribers, joystick })
     }
 
     /// Asks the server for its scene description; the reply lands in the inbox (non-blocking).
@@ -225,5 +210,34 @@ impl ZenohLink {
     /// Publishes one joystick frame (never blocks: dropped under congestion).
     pub fn put_joystick(&self, frame: &[u8]) -> anyhow::Result<()> {
         self.joystick.put(frame.to_vec()).wait().map_err(|e| anyhow!("zenoh put: {e}"))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_newest_frame_wins_and_events_queue_to_their_bound() {
+        let inbox = Inbox::default();
+        inbox.receive(msgs::Topic::Poses, vec![1]);
+        inbox.receive(msgs::Topic::Poses, vec![2]);
+        inbox.receive(msgs::Topic::Stats, vec![3]);
+        inbox.receive(msgs::Topic::Joystick, vec![9]); // not a topic the bridge reads
+        for k in 0..EVENTS_QUEUE + 3 {
+            inbox.receive(msgs::Topic::Events, vec![k as u8]);
+        }
+        let l = inbox.take(Duration::ZERO);
+        assert_eq!((l.poses, l.stats, l.signals), (Some(vec![2]), Some(vec![3]), None));
+        assert_eq!(l.events.len(), EVENTS_QUEUE);
+        assert_eq!(l.events.front(), Some(&vec![0]), "the oldest kept, the overflow dropped");
+        assert!(l.last_frame.is_some());
+        let count = |c: &AtomicU64| c.load(Ordering::Relaxed);
+        assert_eq!((count(&inbox.pose_frames), count(&inbox.pose_frames_skipped)), (2, 1));
+        assert_eq!(count(&inbox.events_frames), EVENTS_QUEUE as u64 + 3);
+        assert_eq!(count(&inbox.events_frames_dropped), 3);
+        // Taken: nothing new until the next frame.
+        let l = inbox.take(Duration::from_millis(1));
+        assert!(l.poses.is_none() && l.events.is_empty());
     }
 }
