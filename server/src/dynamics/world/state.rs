@@ -273,7 +273,10 @@ impl World {
             }
         }
         for (i, r) in s.joint_rows.iter().enumerate() {
-            let joint_ok = matches!(r.key, RowKey::Joint { joint, .. } if joint.index() < self.joints.len());
+            // A row slot out of its range would index past the joint's warm-start records.
+            let joint_ok = matches!(r.key, RowKey::Joint { joint, row }
+                if joint.index() < self.joints.len()
+                    && !matches!(row, crate::dynamics::joint::JointRow::Locked(k) if k >= 6));
             let bodies_ok = r.bodies.iter().flatten().all(|&b| b < self.bodies.len());
             if !(joint_ok && bodies_ok && r.findex.is_none()) {
                 return invalid("joint row", i);
@@ -312,5 +315,35 @@ fn restore_memory(solvers: &mut Vec<Solver>, memory: &[(f64, f64)], options: Sol
             Some(&m) => s.set_cost_memory(m),
             None => s.forget_history(),
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::dynamics::joint::JointRow;
+
+    /// A state whose joint row names a slot past the joint's warm-start records (a damaged
+    /// snapshot) is refused before anything is restored, and the world still answers queries.
+    #[test]
+    fn a_joint_row_slot_out_of_range_is_refused() {
+        let mut scene = crate::scene::load("winch").unwrap();
+        for _ in 0..5 {
+            scene.world.step().unwrap();
+        }
+        let mut state = scene.world.state().unwrap();
+        let i = state.joint_rows.iter().position(|r| matches!(r.key, RowKey::Joint { .. })).unwrap();
+        let RowKey::Joint { joint, .. } = state.joint_rows[i].key else { unreachable!() };
+        state.joint_rows[i].key = RowKey::Joint { joint, row: JointRow::Locked(164) };
+        let before = scene.world.time();
+        assert!(matches!(
+            scene.world.restore_state(&state),
+            Err(WorldStateError::Invalid { what: "joint row", .. })
+        ));
+        assert_eq!(scene.world.time(), before);
+        assert!(scene.world.last_joint_rows().count() > 0);
+        // In range it restores.
+        state.joint_rows[i].key = RowKey::Joint { joint, row: JointRow::Locked(0) };
+        assert!(scene.world.restore_state(&state).is_ok());
     }
 }
