@@ -195,37 +195,21 @@ impl SignalLayout {
 /// body (`<body name>` → [`joint_frame_id`]), or of `world_frame` for a frame on the world.
 /// Joints without a frame, or on a body the description does not have, are left out.
 pub fn joint_frame_transforms(scene: &SceneInfo, stamp: Time, world_frame: &str) -> Vec<TransformStamped> {
-    let d = &scene.description;
-    let mut out: Vec<TransformStamped> = Vec::new();
-    for s in &d.sensors {
-        let (msgs::SensorInfo::Joint { joint, .. }
-        | msgs::SensorInfo::Cylinder { joint, .. }
-        | msgs::SensorInfo::Drum { joint, .. }) = s
-        else {
-            continue;
-        };
-        let child = joint_frame_id(joint);
-        if out.iter().any(|t| t.child_frame_id == child) {
-            continue;
-        }
-        let Some(f) = d.joint(joint).and_then(|j| j.frame.as_ref()) else { continue };
-        let parent = match f.body {
-            Some(id) => match scene.body(id) {
-                Some(b) => b.name.clone(),
-                None => continue,
+    let frames = scene.description.sensed_joint_frames();
+    frames
+        .into_iter()
+        .map(|(body, joint, f)| TransformStamped {
+            header: Header {
+                stamp,
+                frame_id: body.map_or_else(|| world_frame.to_string(), |b| b.name.clone()),
             },
-            None => world_frame.to_string(),
-        };
-        out.push(TransformStamped {
-            header: Header { stamp, frame_id: parent },
-            child_frame_id: child,
+            child_frame_id: joint_frame_id(joint),
             transform: Transform {
                 translation: Vector3 { x: f.position[0], y: f.position[1], z: f.position[2] },
                 rotation: Quaternion::from_array(f.orientation),
             },
-        });
-    }
-    out
+        })
+        .collect()
 }
 
 /// The wrench of a force sensor in `frame` (N, N m; components its sensor does not measure are

@@ -73,36 +73,20 @@ pub fn joint_frame_id(joint: &str) -> String {
 /// has them at once and a plot or a 3D panel can place a sensor's wrench (channels `fx … tz`) in
 /// its frame.
 pub fn joint_frames(d: &msgs::SceneDescription, stamp: foxglove::schemas::Timestamp) -> Vec<FrameTransform> {
-    let mut out: Vec<FrameTransform> = Vec::new();
-    for s in &d.sensors {
-        let (msgs::SensorInfo::Joint { joint, .. }
-        | msgs::SensorInfo::Cylinder { joint, .. }
-        | msgs::SensorInfo::Drum { joint, .. }) = s
-        else {
-            continue;
-        };
-        let child = joint_frame_id(joint);
-        if out.iter().any(|t| t.child_frame_id == child) {
-            continue;
-        }
-        let Some(f) = d.joint(joint).and_then(|j| j.frame.as_ref()) else { continue };
-        let parent = match f.body {
-            Some(id) => match d.body(id) {
-                Some(b) => b.name.clone(),
-                None => continue,
-            },
-            None => WORLD_FRAME.to_string(),
-        };
-        let (p, q) = (f.position, f.orientation);
-        out.push(FrameTransform {
-            timestamp: Some(stamp),
-            parent_frame_id: parent,
-            child_frame_id: child,
-            translation: Some(Vector3 { x: p[0], y: p[1], z: p[2] }),
-            rotation: Some(Quaternion { x: q[0], y: q[1], z: q[2], w: q[3] }),
-        });
-    }
-    out
+    let frames = d.sensed_joint_frames();
+    frames
+        .into_iter()
+        .map(|(body, joint, f)| {
+            let (p, q) = (f.position, f.orientation);
+            FrameTransform {
+                timestamp: Some(stamp),
+                parent_frame_id: body.map_or_else(|| WORLD_FRAME.to_string(), |b| b.name.clone()),
+                child_frame_id: joint_frame_id(joint),
+                translation: Some(Vector3 { x: p[0], y: p[1], z: p[2] }),
+                rotation: Some(Quaternion { x: q[0], y: q[1], z: q[2], w: q[3] }),
+            }
+        })
+        .collect()
 }
 
 #[cfg(test)]

@@ -432,6 +432,35 @@ impl SceneDescription {
         self.joints.iter().find(|j| j.name == name)
     }
 
+    /// The frames the wrench-reading sensors (joint, cylinder, drum) report in, once per joint in
+    /// sensor order: the frame's body (`None`: the world), the joint's name and its frame. Joints
+    /// without a frame, or whose frame is on a body the description lacks, are left out. The ROS 2
+    /// bridge's `/tf_static` and the Foxglove view's `/tf` both publish these as `joint/<joint>`.
+    pub fn sensed_joint_frames(&self) -> Vec<(Option<&BodyInfo>, &str, &JointFrame)> {
+        let mut out: Vec<(Option<&BodyInfo>, &str, &JointFrame)> = Vec::new();
+        for s in &self.sensors {
+            let (SensorInfo::Joint { joint, .. }
+            | SensorInfo::Cylinder { joint, .. }
+            | SensorInfo::Drum { joint, .. }) = s
+            else {
+                continue;
+            };
+            if out.iter().any(|(_, j, _)| *j == joint.as_str()) {
+                continue;
+            }
+            let Some(f) = self.joint(joint).and_then(|j| j.frame.as_ref()) else { continue };
+            let body = match f.body {
+                Some(id) => match self.body(id) {
+                    Some(b) => Some(b),
+                    None => continue,
+                },
+                None => None,
+            };
+            out.push((body, joint, f));
+        }
+        out
+    }
+
     /// The sensor named `name`.
     pub fn sensor(&self, name: &str) -> Option<&SensorInfo> {
         self.sensors.iter().find(|s| s.name() == name)
