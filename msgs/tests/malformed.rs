@@ -363,6 +363,25 @@ fn control_errors() {
         req(r#"{"id":1,"command":{"op":"load_scene","scene":"a\u0000b"}}"#),
         Err(DecodeError::Invalid(ControlError::SceneChar { index: 1 }))
     );
+    // A snapshot path must stay inside the server's snapshot directory.
+    for (op, path) in [
+        ("snapshot", "a/../b"),
+        ("restore", "_/.."),
+        ("restore", "/etc/x"),
+        ("snapshot", "\\\\x"),
+        ("restore", ""),
+    ] {
+        let j = format!(r#"{{"id":1,"command":{{"op":"{op}","path":"{path}"}}}}"#);
+        assert_eq!(
+            req(&j),
+            Err(DecodeError::Invalid(ControlError::SnapshotPath { len: path.replace("\\\\", "\\").len() })),
+            "{op} {path}"
+        );
+    }
+    for (op, path) in [("snapshot", "a/.b/c..d"), ("restore", "rig/step-10.snap")] {
+        let j = format!(r#"{{"id":1,"command":{{"op":"{op}","path":"{path}"}}}}"#);
+        assert!(req(&j).is_ok(), "{op} {path}");
+    }
     let long = format!(r#"{{"id":1,"command":{{"op":"load_scene","scene":"{}"}}}}"#, "s".repeat(257));
     assert_eq!(req(&long), Err(DecodeError::Invalid(ControlError::SceneTooLong { len: 257 })));
     for bad in

@@ -170,6 +170,10 @@ pub fn scene_ref() -> impl Strategy<Value = String> {
     "[^\\x00-\\x1f\\x7f]{1,40}"
 }
 
+/// A valid snapshot path: relative components that never start with a dot, so none is `..`
+/// (which the encoder refuses; `malformed.rs` checks that refusal).
+const SNAPSHOT_PATH: &str = "[A-Za-z0-9_-]{1,20}(/[A-Za-z0-9_-][A-Za-z0-9_.-]{0,19}){0,3}";
+
 pub fn control_request() -> impl Strategy<Value = ControlRequest> {
     let command = prop_oneof![
         Just(ControlCommand::Pause),
@@ -180,8 +184,8 @@ pub fn control_request() -> impl Strategy<Value = ControlRequest> {
             .prop_map(|variant| ControlCommand::SetVariant { variant }),
         scene_ref().prop_map(|scene| ControlCommand::LoadScene { scene }),
         (0.0..1e6f64).prop_map(|sim_time| ControlCommand::RunUntil { sim_time }),
-        "[A-Za-z0-9_-]{1,20}(/[A-Za-z0-9_.-]{1,20}){0,3}".prop_map(|path| ControlCommand::Snapshot { path }),
-        "[A-Za-z0-9_-]{1,20}(/[A-Za-z0-9_.-]{1,20}){0,3}".prop_map(|path| ControlCommand::Restore { path }),
+        SNAPSHOT_PATH.prop_map(|path| ControlCommand::Snapshot { path }),
+        SNAPSHOT_PATH.prop_map(|path| ControlCommand::Restore { path }),
         (
             prop::sample::select(FaultKind::ALL.to_vec()),
             "[A-Za-z0-9_./-]{1,64}",
