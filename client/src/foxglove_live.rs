@@ -19,8 +19,9 @@
 //! arrows, `foxglove.SceneUpdate`), the events frames `/pivotsim/events`
 //! ([`crate::fox::signals`]).
 //!
-//! Message timestamps: the server's wall time (`wall_time_ns`) for transforms and poses, the
-//! receive time for stats, signals, contacts and events.
+//! Message timestamps (log time and header stamps) follow `--clock`: the simulation time of the
+//! frame (the default, as the ROS 2 path stamps `/tf` and `/clock`), or the server's wall time
+//! (`wall_time_ns`) for transforms and poses and the receive time for the rest.
 
 use std::collections::HashMap;
 use std::net::SocketAddr;
@@ -37,7 +38,7 @@ use pivotsim_msgs::Topic;
 use crate::common::Common;
 use crate::fox::front::Front;
 use crate::fox::topics::{self, ChannelSpec};
-use crate::fox::{self, frames, scene};
+use crate::fox::{self, Clock, frames, scene};
 use crate::net::{Received, Stream, TransportKind};
 use crate::stop::{interrupted, secs};
 use crate::tojson;
@@ -66,25 +67,6 @@ pub struct Args {
     /// for the rest).
     #[arg(long, value_enum, default_value = "sim")]
     pub clock: Clock,
-}
-
-/// Which clock stamps the live view's messages.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
-pub enum Clock {
-    /// Simulation time, ns from the scene's start (what `/clock` carries on the ROS 2 path).
-    Sim,
-    /// Wall time, ns since the UNIX epoch.
-    Wall,
-}
-
-impl Clock {
-    /// The stamp of a frame at simulation time `sim_time` taken at wall time `wall_ns`.
-    fn stamp(self, sim_time: f64, wall_ns: u64) -> u64 {
-        match self {
-            Clock::Sim => frames::sim_ns(sim_time),
-            Clock::Wall => wall_ns,
-        }
-    }
 }
 
 /// The latest scene, encoded, for late subscribers.

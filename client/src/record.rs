@@ -29,10 +29,18 @@
 //! sim time, and their effect (a dropout, a parted rope's tension) in the signals: a recording
 //! replays them.
 //!
-//! The world is in the metadata record `pivotsim` (with the transport, scene and timestep), not in
-//! the topics. Log time is the receive time; publish time is the server's `wall_time_ns` for poses
-//! and transforms, the receive time otherwise. The message sequence is the step number for poses,
-//! stats and transforms, a counter for inputs.
+//! The world is in the metadata record `pivotsim` (with the transport, scene, timestep and clock),
+//! not in the topics. The message sequence is the step number for poses, stats and transforms, a
+//! counter for inputs.
+//!
+//! **Clocks.** Log time is always the receive time, so it never runs backwards, not even across a
+//! `reset` or a `load_scene` (a player orders by log time). The publish time and the header stamps
+//! inside messages (`/tf`, the scene, the contact arrows) follow `--clock`: `sim` (the default)
+//! is the frame's simulation time, as the ROS 2 bridge stamps `/tf` and `/clock` and as the live
+//! view stamps by default, so a recording overlays a `ros2 bag` of the bridge (whose log time is
+//! also its receive time) and a recording of the live view; `wall` is the server's `wall_time_ns`
+//! for poses and transforms and the receive time for the rest. Inputs carry no simulation time:
+//! their publish time is the receive time under both clocks.
 //!
 //! **Which inputs are seen.** iceoryx2: every input published on the host's `cmd` service.
 //! Zenoh: inputs of the peers this client is connected to; peers do not forward each other's
@@ -52,7 +60,7 @@ use pivotsim_msgs::Topic;
 
 use crate::common::Common;
 use crate::fox::topics::{self, ChannelSpec};
-use crate::fox::{self, frames, scene};
+use crate::fox::{self, Clock, frames, scene};
 use crate::net::{Received, Stream, TransportKind};
 use crate::stop::{interrupted, secs};
 use crate::tojson;
@@ -74,6 +82,10 @@ pub struct Args {
     /// Leave out the `/tf` channel (`foxglove.FrameTransforms`).
     #[arg(long)]
     pub no_tf: bool,
+    /// Publish times and header stamps: the simulation time (as the ROS 2 bridge and the live
+    /// view) or the wall clock. Log time is the receive time under both.
+    #[arg(long, value_enum, default_value = "sim")]
+    pub clock: Clock,
 }
 
 struct Channels {
@@ -140,6 +152,7 @@ fn open_file(
     let mut meta = BTreeMap::new();
     meta.insert("world".to_string(), world.to_string());
     meta.insert("transport".to_string(), format!("{:?}", args.transport).to_lowercase());
+    meta.insert("clock".to_string(), format!("{:?}", args.clock).to_lowercase());
     if let Some(s) = scene {
         meta.insert("scene".to_string(), s.scene.clone());
         meta.insert("timestep".to_string(), s.timestep.to_string());
@@ -163,12 +176,15 @@ fn open_file(
         ch.tf = Some(add_channel(&mut w, &topics::tf())?);
     }
     if let Some(s) = scene {
+        // Before the first frame: stamped at the scene's start on the simulation clock (the
+        // entities are frame-locked, they follow their bodies' transforms).
         let now = crate::net::now_ns();
-        let shapes = scene::scene_update(s, frames::timestamp(now));
+        let stamp = args.clock.stamp(0.0, now);
+        let shapes = scene::scene_update(s, frames::timestamp(stamp));
         let id = add_channel(&mut w, &topics::scene())?;
-        write(&mut w, id, 0, now, now, &topics::encode(&shapes.update))?;
+        write(&mut w, id, 0, now, stamp, &topics::encode(&shapes.update))?;
         let id = add_channel(&mut w, &topics::description())?;
-        write_json(&mut w, id, 0, now, now, &serde_json::to_value(s)?)?;
+        write_json(&mut w, id, 0, now, stamp, &serde_json::to_value(s)?)?;
     }
     Ok((w, ch))
 }
@@ -191,6 +207,7 @@ struct Recorder<'a> {
     w: McapWriter,
     ch: Channels,
     scene: Option<&'a msgs::SceneDescription>,
+    clock: Clock,
     n: Counts,
 }
 
@@ -199,12 +216,13 @@ impl Recorder<'_> {
     fn poses(&mut self, r: &Received) -> Result<bool> {
         let Ok(v) = msgs::PoseFrameView::parse(&r.bytes) else { return Ok(false) };
         let seq = v.sequence() as u32;
+        let stamp = self.clock.stamp(v.sim_time(), v.wall_time_ns());
         let json = tojson::pose_json(&v, self.scene, |_| true);
-        write_json(&mut self.w, self.ch.poses, seq, r.recv_ns, v.wall_time_ns(), &json)?;
-        write(&mut self.w, self.ch.wire_poses, seq, r.recv_ns, v.wall_time_ns(), &r.bytes)?;
+        write_json(&mut self.w, self.ch.poses, seq, r.recv_ns, stamp, &json)?;
+        write(&mut self.w, self.ch.wire_poses, seq, r.recv_ns, stamp, &r.bytes)?;
         if let Some(tf) = self.ch.tf {
-            let tfs = topics::encode(&frames::frame_transforms(&v, self.scene));
-            write(&mut self.w, tf, seq, r.recv_ns, v.wall_time_ns(), &tfs)?;
+            let tfs = topics::encode(&frames::frame_transforms_at(&v, self.scene, stamp));
+            write(&mut self.w, tf, seq, r.recv_ns, stamp, &tfs)?;
         }
         self.n.poses += 1;
         Ok(true)
@@ -213,7 +231,8 @@ impl Recorder<'_> {
     fn stats(&mut self, r: &Received) -> Result<bool> {
         let Ok(s) = msgs::SolverStats::decode(&r.bytes) else { return Ok(false) };
         let json = tojson::stats_json(&s);
-        write_json(&mut self.w, self.ch.stats, s.sequence as u32, r.recv_ns, r.recv_ns, &json)?;
+        let stamp = self.clock.stamp(s.sim_time, r.recv_ns);
+        write_json(&mut self.w, self.ch.stats, s.sequence as u32, r.recv_ns, stamp, &json)?;
         self.n.stats += 1;
         Ok(true)
     }
@@ -222,12 +241,13 @@ impl Recorder<'_> {
     fn signals(&mut self, r: &Received) -> Result<bool> {
         let Ok(s) = msgs::SignalsFrame::decode(&r.bytes) else { return Ok(false) };
         let seq = s.sequence as u32;
+        let stamp = self.clock.stamp(s.sim_time, r.recv_ns);
         let json = fox::signals::signals_json(&s);
-        write_json(&mut self.w, self.ch.signals, seq, r.recv_ns, r.recv_ns, &json)?;
+        write_json(&mut self.w, self.ch.signals, seq, r.recv_ns, stamp, &json)?;
         let json = fox::signals::contacts_json(&s, self.scene);
-        write_json(&mut self.w, self.ch.contacts, seq, r.recv_ns, r.recv_ns, &json)?;
-        let arrows = topics::encode(&fox::signals::contact_forces(&s, frames::timestamp(r.recv_ns)));
-        write(&mut self.w, self.ch.contact_forces, seq, r.recv_ns, r.recv_ns, &arrows)?;
+        write_json(&mut self.w, self.ch.contacts, seq, r.recv_ns, stamp, &json)?;
+        let arrows = topics::encode(&fox::signals::contact_forces(&s, frames::timestamp(stamp)));
+        write(&mut self.w, self.ch.contact_forces, seq, r.recv_ns, stamp, &arrows)?;
         self.n.signals += 1;
         Ok(true)
     }
@@ -235,7 +255,8 @@ impl Recorder<'_> {
     fn events(&mut self, r: &Received) -> Result<bool> {
         let Ok(e) = msgs::EventsFrame::decode(&r.bytes) else { return Ok(false) };
         let json = fox::signals::events_json(&e);
-        write_json(&mut self.w, self.ch.events, e.sequence as u32, r.recv_ns, r.recv_ns, &json)?;
+        let stamp = self.clock.stamp(e.sim_time, r.recv_ns);
+        write_json(&mut self.w, self.ch.events, e.sequence as u32, r.recv_ns, stamp, &json)?;
         self.n.events += 1;
         Ok(true)
     }
@@ -334,7 +355,7 @@ pub fn run(common: &Common, args: &Args) -> Result<ExitCode> {
             Err(e) => eprintln!("pivotsim-client: no keyframe requested: {e:#}"),
         }
     }
-    let mut rec = Recorder { w, ch, scene: scene.as_ref(), n: Counts::default() };
+    let mut rec = Recorder { w, ch, scene: scene.as_ref(), clock: args.clock, n: Counts::default() };
     let end = args.duration.map(|d| Instant::now() + secs(d));
     let idle = common.timeout.map(secs);
     let tty = std::io::stderr().is_terminal();

@@ -199,6 +199,8 @@ struct Recorded {
     schema: String,
     schema_encoding: String,
     messages: Vec<Vec<u8>>,
+    /// Each message's (log time, publish time).
+    times: Vec<(u64, u64)>,
 }
 
 impl Recorded {
@@ -235,7 +237,9 @@ fn read_mcap(path: &std::path::Path) -> std::collections::BTreeMap<String, Recor
             schema: schema.name.clone(),
             schema_encoding: schema.encoding.clone(),
             messages: Vec::new(),
+            times: Vec::new(),
         });
+        e.times.push((m.log_time, m.publish_time));
         e.messages.push(m.data.into_owned());
     }
     let summary = mcap::Summary::read(&bytes).unwrap().expect("summary");
@@ -323,7 +327,14 @@ fn check_signals(path: &std::path::Path, stderr: &str) {
     assert_eq!(last["dropout_count"], 6, "{last}");
 }
 
-fn check_recording(path: &std::path::Path) {
+/// Which clock a recording was made with (`record --clock`).
+#[derive(Clone, Copy, PartialEq)]
+enum Clock {
+    Sim,
+    Wall,
+}
+
+fn check_recording(path: &std::path::Path, clock: Clock) {
     let m = read_mcap(path);
     for (t, schema, encoding) in [
         ("/pivotsim/poses", "pivotsim.PoseFrame", "jsonschema"),
@@ -344,6 +355,28 @@ fn check_recording(path: &std::path::Path) {
     assert!(poses.len() >= 10, "{} pose messages", poses.len());
     assert!(poses.windows(2).all(|w| w[1]["sequence"].as_u64() > w[0]["sequence"].as_u64()));
     assert_eq!(poses[0]["bodies"][0]["name"], "drum");
+    // Log time is the receive time, never backwards; the publish time follows `--clock`.
+    let sim_ns = |p: &Value| (p["sim_time"].as_f64().unwrap() * 1e9).round() as u64;
+    for t in ["/pivotsim/poses", "/tf"] {
+        let times = &m[t].times;
+        assert!(times.windows(2).all(|w| w[1].0 >= w[0].0), "{t}: log time ran backwards");
+        for (p, &(log, publish)) in poses.iter().zip(times) {
+            let expected = match clock {
+                Clock::Sim => sim_ns(p),
+                Clock::Wall => p["wall_time_ns"].as_u64().unwrap(),
+            };
+            assert_eq!(publish, expected, "{t}: publish time of {p}");
+            assert!(log >= p["wall_time_ns"].as_u64().unwrap(), "{t}: received before it was sent");
+        }
+    }
+    let sig = &m["/pivotsim/signals"];
+    for (s, &(_, publish)) in sig.json().iter().zip(&sig.times) {
+        if clock == Clock::Sim {
+            assert_eq!(publish, sim_ns(s), "signals publish time");
+        } else {
+            assert!(publish > 1_000_000_000_000_000_000, "signals publish time {publish} is not wall time");
+        }
+    }
     // One transform message per pose frame; one scene update and one description.
     assert_eq!(m["/tf"].messages.len(), poses.len());
     assert_eq!(m["/pivotsim/scene"].messages.len(), 1);
@@ -382,7 +415,7 @@ fn record_over_iceoryx2_writes_every_channel() {
     rec.interrupt();
     let out = rec.wait().ok();
     assert!(out.stderr.contains("4 inputs"), "{}", out.stderr);
-    check_recording(&path);
+    check_recording(&path, Clock::Sim);
     check_signals(&path, &out.stderr);
     let _ = std::fs::remove_dir_all(&dir);
 }
@@ -396,7 +429,8 @@ fn record_over_zenoh_sees_inputs_of_peers_connected_to_it() {
     let rec_endpoint = format!("tcp/127.0.0.1:{}", common::free_port());
     let mut a = s.args();
     a.extend(
-        ["--listen", &rec_endpoint, "record", path.to_str().unwrap(), "--duration", "20"].map(String::from),
+        ["--listen", &rec_endpoint, "record", path.to_str().unwrap(), "--duration", "20", "--clock", "wall"]
+            .map(String::from),
     );
     let rec = spawn_client(&a, LIMIT);
     rec.wait_for_stderr("recording world", LIMIT);
@@ -410,7 +444,7 @@ fn record_over_zenoh_sees_inputs_of_peers_connected_to_it() {
     std::thread::sleep(std::time::Duration::from_millis(500));
     rec.interrupt();
     let out = rec.wait().ok();
-    check_recording(&path);
+    check_recording(&path, Clock::Wall);
     check_signals(&path, &out.stderr);
     assert!(out.stderr.contains("0 malformed"), "{}", out.stderr);
     let _ = std::fs::remove_dir_all(&dir);

@@ -22,16 +22,9 @@ pub fn sim_ns(sim_time: f64) -> u64 {
     }
 }
 
-/// One transform `world` → body name per body of the frame, stamped with the server's wall time
-/// (bodies the scene does not name are `body<id>`).
-pub fn frame_transforms(
-    v: &msgs::PoseFrameView<'_>,
-    scene: Option<&msgs::SceneDescription>,
-) -> FrameTransforms {
-    frame_transforms_at(v, scene, v.wall_time_ns())
-}
-
-/// [`frame_transforms`] stamped with `stamp_ns`, followed by the scene's [`joint_frames`].
+/// One transform `world` → body name per body of the frame, stamped with `stamp_ns` (the
+/// view's [`super::Clock`]; bodies the scene does not name are `body<id>`), followed by the
+/// scene's [`joint_frames`].
 pub fn frame_transforms_at(
     v: &msgs::PoseFrameView<'_>,
     scene: Option<&msgs::SceneDescription>,
@@ -107,7 +100,7 @@ mod tests {
         let mut buf = Vec::new();
         f.encode(&mut buf).unwrap();
         let v = msgs::PoseFrameView::parse(&buf).unwrap();
-        let t = frame_transforms(&v, None);
+        let t = frame_transforms_at(&v, None, v.wall_time_ns());
         assert_eq!(t.transforms.len(), 2);
         assert_eq!(t.transforms[0].child_frame_id, "body1");
         assert_eq!(t.transforms[0].parent_frame_id, "world");
