@@ -58,6 +58,10 @@ enum Command {
         /// Solver variant for every island (default: the scene's).
         #[arg(long)]
         variant: Option<Variant>,
+        /// Solver threads: a step's islands solved concurrently, bit-identical to one thread
+        /// (1 ..= 256; default: the cores present; 1: every island in turn on the main thread).
+        #[arg(long, value_parser = cli::values::threads)]
+        threads: Option<usize>,
         /// Write per-step, per-island solver statistics here (CSV).
         #[arg(long)]
         stats: Option<PathBuf>,
@@ -155,6 +159,7 @@ fn main() -> ExitCode {
             snapshot,
             duration,
             variant,
+            threads,
             stats,
             poses,
             dump_mlcp,
@@ -164,6 +169,7 @@ fn main() -> ExitCode {
             json,
             set,
         }) => {
+            let threads = threads.unwrap_or_else(cli::values::default_threads);
             let opts = pivotsim_server::run::RunOptions {
                 duration,
                 variant,
@@ -180,8 +186,10 @@ fn main() -> ExitCode {
                 watchdog: None,
             };
             match (scene, from) {
-                (_, Some(file)) => cli::run::run(cli::run::Start::Snapshot(file), &set, opts, json),
-                (Some(scene), None) => cli::run::run(cli::run::Start::Scene(scene), &set, opts, json),
+                (_, Some(file)) => cli::run::run(cli::run::Start::Snapshot(file), &set, opts, threads, json),
+                (Some(scene), None) => {
+                    cli::run::run(cli::run::Start::Scene(scene), &set, opts, threads, json)
+                }
                 (None, None) => Err(anyhow::anyhow!("give --scene or --from")),
             }
         }

@@ -95,6 +95,10 @@ pub struct RunSummary {
     pub max_island_bodies: usize,
     /// Most islands with rows in one step.
     pub max_islands: usize,
+    /// Solver threads of the world (`World::set_threads`; 1: serial).
+    pub threads: usize,
+    /// Island solves of the run that ran on the solver threads (a step's islands concurrently).
+    pub parallel_solves: u64,
     /// Largest body-mass ratio within an island.
     pub max_mass_ratio: f64,
     /// Mean solve time per step (µs).
@@ -306,6 +310,7 @@ pub fn run_scene_observed(
         .map(|v| ShadowSummary { variant: v.name().into(), ..Default::default() })
         .collect();
     let mut hard = HardSolves::new(if opts.dump_mlcp.is_some() { opts.dump_hard } else { 0 });
+    let parallel_before = scene.world.parallel_solves();
     let mut acc = Acc {
         solve_us: Vec::with_capacity(steps as usize),
         solve_cpu_us: Vec::with_capacity(steps as usize),
@@ -353,6 +358,8 @@ pub fn run_scene_observed(
     bar.finish_and_clear();
     out.flush()?;
     sum.finish(acc, &watchdog, start.elapsed().as_secs_f64(), scene.world.time());
+    sum.threads = scene.world.threads();
+    sum.parallel_solves = scene.world.parallel_solves() - parallel_before;
     Ok(sum)
 }
 
@@ -682,7 +689,7 @@ fn write_problem(path: &Path, p: &crate::solver::Mlcp) -> Result<(), RunError> {
 pub fn summary_text(s: &RunSummary) -> String {
     format!(
         "scene {} ({}): {} steps, {:.2} s simulated in {:.3} s wall (real-time factor {:.1})\n\
-         islands: up to {} with rows; largest {} rows, {} bodies; mass ratio up to {:.3e}\n\
+         islands: up to {} with rows; largest {} rows, {} bodies; mass ratio up to {:.3e}; {} solver thread(s), {} solves parallel\n\
          solve per step: mean {:.1} µs, p99 {:.1} µs, max {:.1} µs (CPU time: p99 {:.1} µs, max {:.1} µs); step mean {:.1} µs\n\
          pivots per solve: mean {:.2}, max {}; tight fraction max {:.3}, mean (largest island) {:.3}\n\
          solves: {} converged, {} inexact, {} at the step cap, {} other; max relative residual {:.2e}\n\
@@ -697,6 +704,8 @@ pub fn summary_text(s: &RunSummary) -> String {
         s.max_island_rows,
         s.max_island_bodies,
         s.max_mass_ratio,
+        s.threads,
+        s.parallel_solves,
         s.mean_solve_us,
         s.p99_solve_us,
         s.max_solve_us,

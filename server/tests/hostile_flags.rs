@@ -48,7 +48,10 @@ fn hostile_values_of_every_numeric_flag_never_panic() {
             );
         }
         cases.push(vec!["solve", &problem, "--max-steps", v]);
+        cases.push([&serve[..], &["--steps", "2", "--fast", "--threads", v]].concat());
+        cases.push(vec!["run", "--scene", "pendulum", "--json", "--duration", "0.1", "--threads", v]);
     }
+    cases.push(vec!["run", "--scene", "pendulum", "--json", "--duration", "0.1", "--threads", "257"]);
     // The values the issue named, once more on their own: they panicked or were taken silently.
     cases.push([&serve[..], &["--steps", "1", "--rtf", "1e-300"]].concat());
     cases.push([&serve[..], &["--steps", "1", "--status-interval", "inf"]].concat());
@@ -66,6 +69,8 @@ fn the_hostile_values_named_in_the_issue_are_clear_errors() {
         ("--status-interval", "nan", "seconds"),
         ("--status-interval", "-1", "seconds"),
         ("--deadman-ms", "0", "0"),
+        ("--threads", "0", "1 ..= 256"),
+        ("--threads", "257", "1 ..= 256"),
     ] {
         let args: Vec<String> = serve.iter().chain(&[flag, value]).map(|s| s.to_string()).collect();
         let o = pivotsim_tests::run(BIN, &args, Duration::from_secs(20));

@@ -21,6 +21,7 @@ pub fn run(
     start: Start,
     overrides: &[SceneOverride],
     mut opts: RunOptions,
+    threads: usize,
     json: bool,
 ) -> anyhow::Result<()> {
     let mut sc = match start {
@@ -42,6 +43,7 @@ pub fn run(
             sc
         }
     };
+    sc.world.set_threads(threads)?;
     let summary = run_scene(&mut sc, &opts)?;
     if json {
         println!("{}", serde_json::to_string(&summary)?);

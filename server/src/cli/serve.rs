@@ -72,6 +72,11 @@ pub struct ServeArgs {
     /// the stats), so no step overruns because of the solver (default: the scene's `max_solve_us`).
     #[arg(long, value_parser = values::positive_finite, allow_negative_numbers = true)]
     pub max_solve_us: Option<f64>,
+    /// Solver threads: a step's islands solved concurrently, bit-identical to one thread, for
+    /// every scene loaded (1 ..= 256; default: the cores present; 1: every island in turn on the
+    /// stepping thread).
+    #[arg(long, value_parser = values::threads)]
+    pub threads: Option<usize>,
     /// A directory whose scene files `load_scene` may read (repeatable; default: none, so peers
     /// can load built-in scenes only). Paths outside it, links leading out of it, FIFOs, devices
     /// and directories are refused (`load_refused`).
@@ -121,6 +126,7 @@ impl ServeArgs {
             start_paused: self.paused,
             overrides: self.set,
             max_solve_us: self.max_solve_us,
+            threads: self.threads.unwrap_or_else(values::default_threads),
             scene_dirs: self.scene_dirs,
             max_scene_bytes: self.max_scene_bytes,
             snapshot_dir: self.snapshot_dir,

@@ -7,6 +7,18 @@ pub fn positive_finite(s: &str) -> Result<f64, String> {
     if v.is_finite() && v > 0.0 { Ok(v) } else { Err(format!("{v} is not a finite number > 0")) }
 }
 
+/// A solver thread count, 1 ..= [`MAX_THREADS`](pivotsim_server::dynamics::MAX_THREADS).
+pub fn threads(s: &str) -> Result<usize, String> {
+    let max = pivotsim_server::dynamics::MAX_THREADS;
+    let v: usize = s.parse().map_err(|e| format!("{e}"))?;
+    if (1..=max).contains(&v) { Ok(v) } else { Err(format!("{v} is not a thread count in 1 ..= {max}")) }
+}
+
+/// The default solver thread count: the cores present (1 when unknown).
+pub fn default_threads() -> usize {
+    std::thread::available_parallelism().map_or(1, |n| n.get()).min(pivotsim_server::dynamics::MAX_THREADS)
+}
+
 /// A finite number `≥ 0` (seconds between keyframes; 0 turns the periodic ones off).
 pub fn non_negative_finite(s: &str) -> Result<f64, String> {
     let v: f64 = s.parse().map_err(|e| format!("{e}"))?;

@@ -541,3 +541,24 @@ pub enum ModelError {
     #[error(transparent)]
     Force(#[from] ForceError),
 }
+
+/// Errors of [`World::set_threads`](super::World::set_threads).
+#[derive(Debug, Clone, PartialEq, Error)]
+pub enum ThreadsError {
+    /// `0`, or more than [`MAX_THREADS`](super::MAX_THREADS).
+    #[error("solver threads must be 1 ..= {max}, got {threads}")]
+    Count {
+        /// What was asked for.
+        threads: usize,
+        /// The most allowed.
+        max: usize,
+    },
+    /// The operating system refused the pool's threads.
+    #[error("cannot start {threads} solver threads: {message}")]
+    Spawn {
+        /// What was asked for.
+        threads: usize,
+        /// The thread pool's error.
+        message: String,
+    },
+}

@@ -117,7 +117,7 @@ pub use contact::{
 pub use coupling::{Coupling, CouplingBuilder, CouplingKind};
 pub use error::{
     BodyError, ChainError, ControlError, CouplingError, ForceError, JointError, ModelError, SettingsError,
-    StateError, StepError,
+    StateError, StepError, ThreadsError,
 };
 pub use force::{ForceElement, SpringDamper};
 pub use geometric_stiffness::RHO_START;
@@ -131,5 +131,5 @@ pub use settings::{DEFAULT_JOINT_ERROR_TOLERANCE, GeometricStiffness, WorldSetti
 pub use shadow::TooManyShadows;
 pub use stats::{IslandStats, MAX_SHADOWS, ShadowSolve};
 pub use watchdog::{DEFAULT_MAX_JOINT_ERROR, Instability, Watchdog, WatchdogSettings};
-pub use world::SUBSTEP_TURN;
 pub use world::{BodyState, JointFramesWorld, JointReaction, JointState, World, WorldState, WorldStateError};
+pub use world::{MAX_THREADS, SUBSTEP_TURN};

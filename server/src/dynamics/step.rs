@@ -28,7 +28,7 @@
 //! ```
 //!
 //! Each stage is a method of [`StepWorkspace`] over the world's items: `prepare_bodies` (1–2),
-//! `push_rows` (3–4), `solve_islands` (5–6), `integrate` (7), `commit` (8);
+//! `push_rows` (3–4), `solve_islands` (5–6, per island slot: [`IslandSlot`]), `integrate` (7), `commit` (8);
 //! [`World::step`](super::World::step) runs them in this order, with the projection between the
 //! last two.
 //!
@@ -70,9 +70,21 @@
 //! **Failure.** If a new state is not finite, the step returns [`StepError::NonFinite`] and leaves
 //! the bodies unchanged. Solver soft outcomes (step cap, inexact) are in [`IslandStats`].
 //!
+//! **Islands in parallel.** Step 5 runs per island slot: the step's `s`-th island with rows owns
+//! slot `s` — its solver (warm state, ordering and pattern reuse), its assembler and its problem —
+//! and reads only what all islands share (rows, free motion, the warm-start records). With a solver
+//! pool (`World::set_threads`, `--threads`) and at least two islands of [`PARALLEL_MIN_ROWS`] rows,
+//! the slots are solved concurrently (rayon, one task per slot, work stealing); otherwise in turn.
+//! Either way the answers are then taken in island order (`v⁺`, input work, statistics, warm
+//! records), so the result is the same to the bit whatever the thread count, and a replay does not
+//! depend on it. The islands share the step's time budget as one deadline, each against it.
+//! Shadow solves (`shadow.rs`) keep the serial path: they are timed against the world's own solves.
+//!
 //! **Allocation.** Every buffer lives in [`StepWorkspace`] and is cleared and reused, and the island
 //! problem is refilled in place ([`Mlcp::assign`](crate::solver::Mlcp::assign)): once the first
-//! steps of a scene have sized them, a step allocates nothing.
+//! steps of a scene have sized them, a serial step allocates nothing. A parallel one allocates once
+//! every 63 steps, on the stepping thread: rayon's injector queue, which takes the step's job, grows
+//! by a block of 63 slots (`tests/dynamics_parallel_allocation.rs`).
 
 use std::collections::HashMap;
 use std::time::Instant;
@@ -99,6 +111,9 @@ use super::shadow::Shadows;
 use super::stats::IslandStats;
 use crate::solver::{IndexState, Mlcp, SolveStats, SolveStatus, Solver};
 
+/// Fewest rows of an island that is worth a solver thread (`parallel_worth_it`).
+pub const PARALLEL_MIN_ROWS: usize = 24;
+
 /// Reusable buffers of the step.
 /// A body's position, orientation, linear and angular velocity.
 type BodyState = (Vector3<f64>, UnitQuaternion<f64>, Vector3<f64>, Vector3<f64>);
@@ -110,10 +125,18 @@ pub(crate) struct StepWorkspace {
     pub dynamic: Vec<bool>,
     pub rows: Vec<ConstraintRow>,
     pub islands: Islands,
+    /// The projection's assembly and island problem (`projection.rs`), refilled per island.
     pub asm: Assembler,
-    /// The island problem, refilled in place for every island.
     pub problem: Mlcp,
-    pub solvers: Vec<Solver>,
+    /// One slot per island with rows, in island order: its solver, assembly and problem.
+    pub slots: Vec<IslandSlot>,
+    /// Slot → island of this step.
+    slot_island: Vec<usize>,
+    /// The solver threads (`None`: every island on the calling thread; `World::set_threads`).
+    pub pool: Option<rayon::ThreadPool>,
+    /// Island solves (first solves, re-solves and substeps' solves) whose islands ran on the
+    /// pool, since the world was built.
+    pub parallel_solves: u64,
     /// Other variants solving the same island problems for comparison (`shadow.rs`; none by default).
     pub shadows: Shadows,
     pub v_new: Vec<Vector3<f64>>,
@@ -265,14 +288,141 @@ fn island_stats(
     }
 }
 
+/// The warm-start records of the rows: read by the islands' solves, written after them.
+#[derive(Clone, Copy)]
+struct WarmView<'a> {
+    joints: &'a [[WarmRow; JOINT_SLOTS]],
+    couplings: &'a [WarmRow],
+    forces: &'a [WarmRow],
+    contacts: &'a HashMap<RowKey, WarmRow>,
+}
+
+impl<'a> WarmView<'a> {
+    fn row(self, key: RowKey) -> Option<&'a WarmRow> {
+        match key {
+            RowKey::Joint { joint, row } => self.joints.get(joint.index()).map(|w| &w[row.slot()]),
+            RowKey::Coupling(c) => self.couplings.get(c.index()),
+            RowKey::Force(f) => self.forces.get(f.index()),
+            RowKey::Contact { .. } => self.contacts.get(&key),
+        }
+    }
+}
+
+/// What every island's solve reads (shared by the solver threads).
+struct SlotInput<'a> {
+    islands: &'a Islands,
+    rows: &'a [ConstraintRow],
+    motion: &'a [BodyMotion],
+    warm: WarmView<'a>,
+    h: f64,
+    warm_start: bool,
+    warm_stamp: u64,
+    deadline: Option<Instant>,
+}
+
+/// One island with rows of a step: its solver (slot `s` is the step's `s`-th island with rows,
+/// the same solver from step to step, as warm starts and pattern reuse need), its own assembly
+/// and problem buffers, so that slots solve concurrently, and what its last solve left.
+#[derive(Debug)]
+pub(crate) struct IslandSlot {
+    pub solver: Solver,
+    asm: Assembler,
+    problem: Mlcp,
+    stats: IslandStats,
+    error: Option<StepError>,
+    /// The shadows solved this slot's problem before the world's own solve.
+    shadows_done: bool,
+}
+
+impl IslandSlot {
+    pub(crate) fn new(options: crate::solver::SolverOptions) -> Self {
+        IslandSlot {
+            solver: Solver::new(options),
+            asm: Assembler::default(),
+            problem: Mlcp::default(),
+            stats: IslandStats::default(),
+            error: None,
+            shadows_done: false,
+        }
+    }
+
+    /// Island `k`'s MLCP (step 5): assembly and the warm start (the rows' records stamped
+    /// `warm_stamp`) into the slot's problem; an assembly error is kept for `finish_island`.
+    fn prepare(&mut self, k: usize, inp: &SlotInput<'_>) {
+        let t = Instant::now();
+        self.error = None;
+        self.asm.assemble(k, inp.islands, inp.rows, inp.motion, inp.h);
+        let max_violation = self.load_warm_start(k, inp);
+        let m = inp.islands.rows(k).len();
+        self.asm.lambda.clear();
+        self.asm.lambda.resize(m, 0.0);
+        if let Err(source) = self.asm.fill_mlcp(&mut self.problem, inp.warm_start) {
+            self.error = Some(StepError::Assembly { island: k, source });
+        }
+        self.stats.island = k;
+        self.stats.bodies = inp.islands.bodies(k).len();
+        self.stats.rows = m;
+        self.stats.max_violation = max_violation;
+        self.stats.assemble_us = t.elapsed().as_secs_f64() * 1e6;
+    }
+
+    /// Solves the prepared problem (step 5's MLCP) into `asm.lambda`, with its statistics.
+    fn solve_prepared(&mut self, inp: &SlotInput<'_>) {
+        if self.error.is_some() {
+            return;
+        }
+        self.solver.set_deadline(inp.deadline);
+        let s = self.solver.solve(&self.problem, &mut self.asm.lambda);
+        let st = &self.stats;
+        self.stats = island_stats(st.island, st.bodies, st.rows, s, st.max_violation, st.assemble_us);
+    }
+
+    /// Fills the assembler's warm start (`lambda0`, `index0`) of island `k` from the rows' records
+    /// stamped `warm_stamp` (the last step's; a re-solve's: this step's first solve); returns the
+    /// island's largest position violation `|φ|`.
+    fn load_warm_start(&mut self, k: usize, inp: &SlotInput<'_>) -> f64 {
+        self.asm.lambda0.clear();
+        self.asm.index0.clear();
+        let mut max_violation: f64 = 0.0;
+        for &ri in inp.islands.rows(k) {
+            let r = &inp.rows[ri];
+            if r.kind == RowKind::Position {
+                max_violation = max_violation.max(r.phi.abs());
+            }
+            let w = inp.warm.row(r.key).copied().unwrap_or_default();
+            let valid = inp.warm_stamp > 0 && w.stamp == inp.warm_stamp;
+            self.asm.lambda0.push(if valid { w.lambda } else { 0.0 });
+            self.asm.index0.push(if valid { w.state } else { IndexState::Free });
+        }
+        max_violation
+    }
+}
+
 impl StepWorkspace {
     /// The warm-start record of a row (`None` for an item the cache has not seen).
     pub fn warm_row(&self, key: RowKey) -> Option<&WarmRow> {
-        match key {
-            RowKey::Joint { joint, row } => self.warm.get(joint.index()).map(|w| &w[row.slot()]),
-            RowKey::Coupling(c) => self.warm_couplings.get(c.index()),
-            RowKey::Force(f) => self.warm_forces.get(f.index()),
-            RowKey::Contact { .. } => self.warm_contacts.get(&key),
+        self.warm_view().row(key)
+    }
+
+    /// Whether a step's `n` islands with rows go to the pool: at least two of them have
+    /// [`PARALLEL_MIN_ROWS`] rows (smaller ones cost less than waking a thread), and no shadow
+    /// solves run (they are timed against the world's own solves, which must not share the cores).
+    fn parallel_worth_it(&self, n: usize) -> bool {
+        self.pool.is_some()
+            && self.shadows.is_empty()
+            && self.slot_island[..n]
+                .iter()
+                .filter(|&&k| self.islands.rows(k).len() >= PARALLEL_MIN_ROWS)
+                .count()
+                >= 2
+    }
+
+    fn warm_view(&self) -> WarmView<'_> {
+        WarmView {
+            joints: &self.warm,
+            couplings: &self.warm_couplings,
+            forces: &self.warm_forces,
+            contacts: &self.warm_contacts,
         }
     }
 
@@ -418,80 +568,42 @@ impl StepWorkspace {
         self.solve_islands_from(settings, step, step + 1)
     }
 
-    /// Solves island `k` (steps 5–6): assembly, warm start (the rows' records stamped
-    /// `warm_stamp`), solve; leaves `v⁺` of the island's bodies in `v_new`/`w_new` and the impulses
-    /// in the warm-start cache.
-    fn solve_island(
+    /// Takes island `k`'s answer out of its slot `slot` (solved by [`IslandSlot::solve`]): `v⁺` of
+    /// its bodies into `v_new`/`w_new`, its input work, its statistics (and shadow solves) and its
+    /// impulses and index states as the next step's warm start. Called in island order.
+    fn finish_island(
         &mut self,
         settings: &WorldSettings,
         k: usize,
+        slot: usize,
         step: u64,
-        warm_stamp: u64,
-        deadline: Option<Instant>,
     ) -> Result<(), StepError> {
-        let h = settings.timestep;
-        let t = Instant::now();
-        self.asm.assemble(k, &self.islands, &self.rows, &self.motion, h);
-        let max_violation = self.load_warm_start(k, warm_stamp);
-        let solved = self.stats.len();
-        if self.solvers.len() <= solved {
-            self.solvers.push(Solver::new(settings.solver));
+        let sl = &mut self.slots[slot];
+        if let Some(e) = sl.error.take() {
+            return Err(e);
         }
-        let m = self.islands.rows(k).len();
-        self.asm.lambda.clear();
-        self.asm.lambda.resize(m, 0.0);
-        self.asm
-            .fill_mlcp(&mut self.problem, settings.warm_start)
-            .map_err(|source| StepError::Assembly { island: k, source })?;
-        let assemble_us = t.elapsed().as_secs_f64() * 1e6;
         if self.capture {
-            self.captured.push(self.problem.clone());
+            self.captured.push(sl.problem.clone());
         }
-        // Shadows first on odd steps (`shadow.rs`), never ahead of a solve with a time budget.
-        let shadows_first = !self.shadows.is_empty() && deadline.is_none() && step % 2 == 1;
-        if shadows_first {
-            self.shadows.solve(&self.problem, solved, settings.solver);
-        }
-        self.solvers[solved].set_deadline(deadline);
-        let s = self.solvers[solved].solve(&self.problem, &mut self.asm.lambda);
-        let mut st = island_stats(k, self.islands.bodies(k).len(), m, s, max_violation, assemble_us);
+        let mut st = sl.stats;
         if !self.shadows.is_empty() {
-            if !shadows_first {
-                self.shadows.solve(&self.problem, solved, settings.solver);
+            if !sl.shadows_done {
+                self.shadows.solve(&sl.problem, slot, settings.solver);
             }
-            self.shadows.record(&mut st, &self.asm.lambda);
+            self.shadows.record(&mut st, &sl.asm.lambda);
         }
-        self.asm.apply_impulses(k, &self.islands, &self.rows, &mut self.v_new, &mut self.w_new);
-        self.add_input_work(k);
-        self.stat_of_island[k] = solved;
+        sl.asm.apply_impulses(k, &self.islands, &self.rows, &mut self.v_new, &mut self.w_new);
+        self.add_input_work(k, slot);
+        self.stat_of_island[k] = slot;
         self.stats.push(st);
-        self.store_warm_start(k, solved, step);
+        self.store_warm_start(k, slot, step);
         Ok(())
-    }
-
-    /// Fills the assembler's warm start (`lambda0`, `index0`) of island `k` from the rows' records
-    /// stamped `step` (the last step's; a re-solve's: this step's first solve); returns the
-    /// island's largest position violation `|φ|`.
-    fn load_warm_start(&mut self, k: usize, step: u64) -> f64 {
-        self.asm.lambda0.clear();
-        self.asm.index0.clear();
-        let mut max_violation: f64 = 0.0;
-        for &ri in self.islands.rows(k) {
-            let r = &self.rows[ri];
-            if r.kind == RowKind::Position {
-                max_violation = max_violation.max(r.phi.abs());
-            }
-            let w = self.warm_row(r.key).copied().unwrap_or_default();
-            let valid = step > 0 && w.stamp == step;
-            self.asm.lambda0.push(if valid { w.lambda } else { 0.0 });
-            self.asm.index0.push(if valid { w.state } else { IndexState::Free });
-        }
-        max_violation
     }
 
     /// Adds the work the input rows of island `k` did on its dynamic bodies (the watchdog's energy
     /// budget) to `input_work`.
-    fn add_input_work(&mut self, k: usize) {
+    fn add_input_work(&mut self, k: usize, slot: usize) {
+        let lambda = &self.slots[slot].asm.lambda;
         // Inputs: motors, couplings, friction and force rows (velocity and force rows), and every
         // row that reaches a kinematic or static body. Passive position rows between dynamic bodies
         // are not inputs: energy they add is what the watchdog looks for.
@@ -504,18 +616,19 @@ impl StepWorkspace {
                     .filter(|&(b, _)| self.motion[b].dynamic)
                     .map(|(b, j)| j.dot(&self.v_new[b], &self.w_new[b]))
                     .sum();
-                self.input_work += self.asm.lambda[i] * jv;
+                self.input_work += lambda[i] * jv;
             }
         }
     }
 
     /// Records the impulses and index states of island `k` (solved by solver `solved`) as the warm
     /// start of the next step.
-    fn store_warm_start(&mut self, k: usize, solved: usize, step: u64) {
-        let states = self.solvers[solved].index_set();
+    fn store_warm_start(&mut self, k: usize, slot: usize, step: u64) {
+        let sl = &self.slots[slot];
+        let states = sl.solver.index_set();
         for (i, &ri) in self.islands.rows(k).iter().enumerate() {
             let state = states.get(i).copied().unwrap_or_default();
-            let lambda = self.asm.lambda[i];
+            let lambda = sl.asm.lambda[i];
             let slot = match self.rows[ri].key {
                 RowKey::Joint { joint, row } => &mut self.warm[joint.index()][row.slot()],
                 RowKey::Coupling(c) => &mut self.warm_couplings[c.index()],
@@ -585,10 +698,60 @@ impl StepWorkspace {
         let deadline = settings.solver.max_solve_us.and_then(|us| {
             Instant::now().checked_add(std::time::Duration::try_from_secs_f64(us * 1e-6).ok()?)
         });
-        for k in 0..self.islands.len() {
-            if !self.islands.rows(k).is_empty() {
-                self.solve_island(settings, k, step, warm_stamp, deadline)?;
+        self.slot_island.clear();
+        self.slot_island.extend((0..self.islands.len()).filter(|&k| !self.islands.rows(k).is_empty()));
+        let n = self.slot_island.len();
+        while self.slots.len() < n {
+            self.slots.push(IslandSlot::new(settings.solver));
+        }
+        let parallel = self.parallel_worth_it(n);
+        let input = SlotInput {
+            islands: &self.islands,
+            rows: &self.rows,
+            motion: &self.motion,
+            warm: WarmView {
+                joints: &self.warm,
+                couplings: &self.warm_couplings,
+                forces: &self.warm_forces,
+                contacts: &self.warm_contacts,
+            },
+            h: settings.timestep,
+            warm_start: settings.warm_start,
+            warm_stamp,
+            deadline,
+        };
+        match (&self.pool, parallel) {
+            (Some(pool), true) => {
+                use rayon::prelude::*;
+                self.parallel_solves += 1;
+                let of = &self.slot_island;
+                let input = &input;
+                // One task per slot (work stealing balances one large island against small ones).
+                pool.install(|| {
+                    self.slots[..n].par_iter_mut().with_max_len(1).enumerate().for_each(|(s, slot)| {
+                        slot.prepare(of[s], input);
+                        slot.solve_prepared(input);
+                        slot.shadows_done = false;
+                    })
+                });
             }
+            _ => {
+                // Serial: island by island (odd steps the shadows first, `shadow.rs`).
+                let shadows_first = !self.shadows.is_empty() && deadline.is_none() && step % 2 == 1;
+                for s in 0..n {
+                    let slot = &mut self.slots[s];
+                    slot.prepare(self.slot_island[s], &input);
+                    slot.shadows_done = shadows_first && slot.error.is_none();
+                    if slot.shadows_done {
+                        self.shadows.solve(&slot.problem, s, settings.solver);
+                    }
+                    slot.solve_prepared(&input);
+                }
+            }
+        }
+        for s in 0..n {
+            let k = self.slot_island[s];
+            self.finish_island(settings, k, s, step)?;
         }
         let solved = step + 1;
         self.warm_contacts.retain(|_, w| w.stamp == solved);

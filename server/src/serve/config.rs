@@ -65,6 +65,8 @@ pub struct ServeConfig {
     /// scene's own `max_solve_us`): the solver returns its best safe iterate when it is spent, so a
     /// step never overruns because of the solver (by more than one pivot step).
     pub max_solve_us: Option<f64>,
+    /// Solver threads of every scene loaded (`World::set_threads`; 1: serial).
+    pub threads: usize,
     /// Directories whose scene files `load_scene` may read (`--scene-dir`, repeatable; none by
     /// default: built-in scenes and the start scene only). `serve/loader.rs` states the rules.
     pub scene_dirs: Vec<PathBuf>,
@@ -108,6 +110,7 @@ impl Default for ServeConfig {
             start_paused: false,
             overrides: Vec::new(),
             max_solve_us: None,
+            threads: 1,
             scene_dirs: Vec::new(),
             max_scene_bytes: super::loader::DEFAULT_MAX_SCENE_BYTES,
             slow_load: None,

@@ -89,6 +89,8 @@ pub struct Engine {
     start_scene: String,
     /// Server-wide solve time budget (`serve --max-solve-us`), applied to every scene loaded.
     max_solve_us: Option<f64>,
+    /// Solver threads of every scene loaded ([`Engine::set_threads`]).
+    threads: usize,
     /// What `load_scene` and `reset` may read.
     policy: Arc<LoadPolicy>,
     /// Where `snapshot` writes and `restore` reads (`serve --snapshot-dir`; none: both refused).
@@ -241,6 +243,7 @@ impl Engine {
             overrides: Vec::new(),
             start_scene: String::new(),
             max_solve_us: None,
+            threads: 1,
             policy: Arc::new(LoadPolicy::default()),
             snapshot_dir: None,
             journal: Journal::new(DEFAULT_KEYFRAME_EVERY),
@@ -537,8 +540,21 @@ impl Engine {
         Ok(())
     }
 
+    /// Solver threads for this scene and every scene loaded after it (`World::set_threads`: the
+    /// result is the same to the bit; a replay does not depend on it).
+    pub fn set_threads(&mut self, threads: usize) -> Result<(), crate::dynamics::ThreadsError> {
+        self.scene.world.set_threads(threads)?;
+        self.threads = threads;
+        Ok(())
+    }
+
     fn scene_changed(&mut self) {
         self.generation += 1;
+        if self.scene.world.threads() != self.threads
+            && let Err(e) = self.scene.world.set_threads(self.threads)
+        {
+            warn!("scene `{}`: {e}; its islands are solved in turn", self.scene.name);
+        }
         let d = describe(&self.scene, self.world_name.as_str());
         self.description.clear();
         if let Err(e) = d.encode(&mut self.description) {

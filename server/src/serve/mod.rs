@@ -124,6 +124,7 @@ pub fn run_with(
         config.max_solve_us,
     )?;
     engine.set_load_policy(policy);
+    engine.set_threads(config.threads).map_err(|e| ServeError::Option(e.to_string()))?;
     engine.set_snapshot_dir(config.snapshot_dir.clone());
     engine.set_keyframe_every(config.keyframes);
     engine.set_paused(config.start_paused);

@@ -5,6 +5,7 @@
 
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::cell::Cell;
+use std::sync::atomic::{AtomicUsize, Ordering};
 
 struct Counting;
 
@@ -13,7 +14,11 @@ thread_local! {
     static ALLOCS: Cell<usize> = const { Cell::new(0) };
 }
 
+/// Every thread's allocations (for a test binary with one test: see [`process_allocations_during`]).
+static PROCESS: AtomicUsize = AtomicUsize::new(0);
+
 fn count() {
+    PROCESS.fetch_add(1, Ordering::Relaxed);
     // `try_with`: during thread teardown the slot may be gone; those allocations are not ours.
     let _ = ALLOCS.try_with(|c| c.set(c.get() + 1));
 }
@@ -51,4 +56,13 @@ pub fn allocations_during(f: impl FnOnce()) -> usize {
 #[allow(dead_code)] // not every test binary that includes this module uses it
 pub fn allocations_per_call(n: usize, mut f: impl FnMut()) -> f64 {
     allocations_during(|| (0..n).for_each(|_| f())) as f64 / n as f64
+}
+
+/// Allocations made by any thread of the process while `f` runs: for work spread over threads
+/// (the solver pool). Counts other tests' allocations too, so only for a test binary with one test.
+#[allow(dead_code)]
+pub fn process_allocations_during(f: impl FnOnce()) -> usize {
+    let before = PROCESS.load(Ordering::SeqCst);
+    f();
+    PROCESS.load(Ordering::SeqCst) - before
 }

@@ -24,6 +24,7 @@ use super::contact::ContactSet;
 use super::coupling::{Coupling, CouplingBuilder, validate_max_torque};
 use super::error::{
     BodyError, ControlError, CouplingError, ForceError, JointError, SettingsError, StateError, StepError,
+    ThreadsError,
 };
 use super::force::ForceElement;
 use super::ids::{BodyId, CouplingId, ForceId, JointId};
@@ -35,6 +36,9 @@ use super::step::StepWorkspace;
 
 /// The turn of a body in one step (rad) beyond which an open joint is resolved by substeps.
 pub const SUBSTEP_TURN: f64 = 0.25;
+
+/// Most solver threads of a world ([`World::set_threads`]).
+pub const MAX_THREADS: usize = 256;
 
 /// A multibody world.
 #[derive(Debug)]
@@ -80,6 +84,38 @@ impl World {
         })
     }
 
+    /// Solver threads: `1` (the default) solves a step's islands in turn on the calling thread;
+    /// `n > 1` solves them on a pool of `n` threads, made here once and kept (`step.rs`, "Islands
+    /// in parallel"). The result is the same to the bit either way. Only the islands of one step
+    /// run concurrently, and only when at least two of them are worth a thread.
+    pub fn set_threads(&mut self, threads: usize) -> Result<(), ThreadsError> {
+        if threads == 0 || threads > MAX_THREADS {
+            return Err(ThreadsError::Count { threads, max: MAX_THREADS });
+        }
+        self.ws.pool = if threads == 1 {
+            None
+        } else {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .thread_name(|i| format!("pivotsim-solve-{i}"))
+                .build()
+                .map_err(|e| ThreadsError::Spawn { threads, message: e.to_string() })?;
+            Some(pool)
+        };
+        Ok(())
+    }
+
+    /// How many times a step's islands were solved on the pool ([`Self::set_threads`]) since the
+    /// world was built (re-solves and substeps count once each).
+    pub fn parallel_solves(&self) -> u64 {
+        self.ws.parallel_solves
+    }
+
+    /// Solver threads ([`Self::set_threads`]).
+    pub fn threads(&self) -> usize {
+        self.ws.pool.as_ref().map_or(1, rayon::ThreadPool::current_num_threads)
+    }
+
     /// Settings.
     pub fn settings(&self) -> &WorldSettings {
         &self.settings
@@ -89,7 +125,7 @@ impl World {
     pub fn set_settings(&mut self, settings: WorldSettings) -> Result<(), SettingsError> {
         settings.validate()?;
         self.settings = settings;
-        for s in self.ws.solvers.iter_mut().chain(self.ws.proj_solvers.iter_mut()) {
+        for s in self.ws.slots.iter_mut().map(|s| &mut s.solver).chain(self.ws.proj_solvers.iter_mut()) {
             s.set_options(settings.solver);
         }
         self.ws.shadows.set_options(settings.solver);

@@ -36,6 +36,7 @@ use crate::dynamics::contact::{NarrowPhase, NarrowState};
 use crate::dynamics::joint::JOINT_SLOTS;
 use crate::dynamics::motor::JointMotor;
 use crate::dynamics::rows::{ConstraintRow, RowKey, WarmRow};
+use crate::dynamics::step::IslandSlot;
 use crate::solver::{Solver, SolverOptions, Variant};
 
 /// A body's pose and velocities: position, orientation `(i, j, k, w)`, linear and angular
@@ -173,7 +174,7 @@ impl World {
                 .filter(|r| matches!(r.key, RowKey::Joint { .. }))
                 .copied()
                 .collect(),
-            solver_memory: self.ws.solvers.iter().map(Solver::cost_memory).collect(),
+            solver_memory: self.ws.slots.iter().map(|s| s.solver.cost_memory()).collect(),
             projection_memory: self.ws.proj_solvers.iter().map(Solver::cost_memory).collect(),
             input_work: self.ws.input_work,
             gs_resolves: self.ws.gs_resolves,
@@ -214,7 +215,15 @@ impl World {
         ws.rows.clone_from(&state.joint_rows);
         ws.input_work = state.input_work;
         ws.gs_resolves = state.gs_resolves;
-        restore_memory(&mut ws.solvers, &state.solver_memory, settings.solver);
+        while ws.slots.len() < state.solver_memory.len() {
+            ws.slots.push(IslandSlot::new(settings.solver));
+        }
+        for (i, slot) in ws.slots.iter_mut().enumerate() {
+            match state.solver_memory.get(i) {
+                Some(&m) => slot.solver.set_cost_memory(m),
+                None => slot.solver.forget_history(),
+            }
+        }
         restore_memory(&mut ws.proj_solvers, &state.projection_memory, settings.solver);
         self.contacts.phase.restore(&state.narrow);
         Ok(())
