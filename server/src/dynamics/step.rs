@@ -705,27 +705,32 @@ impl StepWorkspace {
             self.slots.push(IslandSlot::new(settings.solver));
         }
         let parallel = self.parallel_worth_it(n);
-        let input = SlotInput {
-            islands: &self.islands,
-            rows: &self.rows,
-            motion: &self.motion,
-            warm: WarmView {
-                joints: &self.warm,
-                couplings: &self.warm_couplings,
-                forces: &self.warm_forces,
-                contacts: &self.warm_contacts,
-            },
-            h: settings.timestep,
-            warm_start: settings.warm_start,
-            warm_stamp,
-            deadline,
-        };
+        // What every island's solve reads, borrowed field by field (the slots are written meanwhile).
+        macro_rules! input {
+            () => {
+                SlotInput {
+                    islands: &self.islands,
+                    rows: &self.rows,
+                    motion: &self.motion,
+                    warm: WarmView {
+                        joints: &self.warm,
+                        couplings: &self.warm_couplings,
+                        forces: &self.warm_forces,
+                        contacts: &self.warm_contacts,
+                    },
+                    h: settings.timestep,
+                    warm_start: settings.warm_start,
+                    warm_stamp,
+                    deadline,
+                }
+            };
+        }
         match (&self.pool, parallel) {
             (Some(pool), true) => {
                 use rayon::prelude::*;
                 self.parallel_solves += 1;
                 let of = &self.slot_island;
-                let input = &input;
+                let input = &input!();
                 // One task per slot (work stealing balances one large island against small ones).
                 pool.install(|| {
                     self.slots[..n].par_iter_mut().with_max_len(1).enumerate().for_each(|(s, slot)| {
@@ -734,24 +739,31 @@ impl StepWorkspace {
                         slot.shadows_done = false;
                     })
                 });
-            }
-            _ => {
-                // Serial: island by island (odd steps the shadows first, `shadow.rs`).
-                let shadows_first = !self.shadows.is_empty() && deadline.is_none() && step % 2 == 1;
                 for s in 0..n {
-                    let slot = &mut self.slots[s];
-                    slot.prepare(self.slot_island[s], &input);
-                    slot.shadows_done = shadows_first && slot.error.is_none();
-                    if slot.shadows_done {
-                        self.shadows.solve(&slot.problem, s, settings.solver);
-                    }
-                    slot.solve_prepared(&input);
+                    self.finish_island(settings, self.slot_island[s], s, step)?;
                 }
             }
-        }
-        for s in 0..n {
-            let k = self.slot_island[s];
-            self.finish_island(settings, k, s, step)?;
+            _ => {
+                // Serial: island by island, each taken before the next is solved (odd steps the
+                // shadows first, `shadow.rs`: they keep one answer per variant, read at the take).
+                // Islands own disjoint rows, so taking one (its warm records) changes nothing the
+                // next reads: the order is the parallel path's.
+                let shadows_first = !self.shadows.is_empty() && deadline.is_none() && step % 2 == 1;
+                for s in 0..n {
+                    let k = self.slot_island[s];
+                    {
+                        let input = input!();
+                        let slot = &mut self.slots[s];
+                        slot.prepare(k, &input);
+                        slot.shadows_done = shadows_first && slot.error.is_none();
+                        if slot.shadows_done {
+                            self.shadows.solve(&slot.problem, s, settings.solver);
+                        }
+                        slot.solve_prepared(&input);
+                    }
+                    self.finish_island(settings, k, s, step)?;
+                }
+            }
         }
         let solved = step + 1;
         self.warm_contacts.retain(|_, w| w.stamp == solved);
