@@ -18,6 +18,9 @@ use pivotsim_server::serve::{ServeConfig, ServeError, ZenohOptions, run};
 use pivotsim_tests::{Server, free_endpoint};
 use zenoh::Wait;
 
+/// A received pose frame: its sequence and its body ids.
+type Frame = (u64, Vec<u32>);
+
 /// The body ids of a world's pose frames, from its scene description.
 fn body_ids(d: &msgs::SceneDescription) -> Vec<u32> {
     d.bodies.iter().map(|b| b.id).collect()
@@ -75,8 +78,8 @@ fn three_worlds_side_by_side_each_client_sees_only_its_own() {
         })
         .collect();
 
-    // Frames per world and path: (key or world, sequence, body ids).
-    let mut seen: HashMap<(String, &str), Vec<(u64, Vec<u32>)>> = HashMap::new();
+    // Frames per (world, path): sequence and body ids.
+    let mut seen: HashMap<(String, &str), Vec<Frame>> = HashMap::new();
     let frame = |bytes: &[u8]| {
         let v = msgs::PoseFrameView::parse(bytes).expect("a pose frame");
         (v.sequence(), v.bodies().map(|b| b.id).collect::<Vec<u32>>())
