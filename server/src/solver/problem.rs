@@ -312,9 +312,66 @@ impl SymCsr {
     /// is needed, and one counting pass builds rows with sorted columns: row `j` receives its
     /// mirrored entries `(j, i)`, `i < j`, in increasing `i` before its own upper entries. On error
     /// the matrix is left empty.
+    ///
+    /// When `upper` has the structure of the matrix already held (the assembler's common case: the
+    /// same rows on the same bodies as last step), only the values are written, each into the slot
+    /// the full build would give it; the structure is checked entry by entry on the way (every slot
+    /// of every row written once, in order), and anything else falls back to the full build. The
+    /// result, errors included, is the full build's.
     pub fn assign_from_upper(&mut self, n: usize, upper: &[(usize, usize, f64)]) -> Result<(), MlcpError> {
-        let result = self.assign_upper_inner(n, upper);
+        let result = match self.refill_upper_values(n, upper) {
+            Some(result) => result,
+            None => self.assign_upper_inner(n, upper),
+        };
         self.emptied_on_error(result)
+    }
+
+    /// The values of `upper` into the structure held, if `upper` has exactly that structure
+    /// (`None`, values possibly overwritten, otherwise). Errors as the full build reports them: the
+    /// first non-finite entry in order, else the first negative diagonal entry.
+    fn refill_upper_values(
+        &mut self,
+        n: usize,
+        upper: &[(usize, usize, f64)],
+    ) -> Option<Result<(), MlcpError>> {
+        if n == 0 || n != self.n || self.row_ptr.len() != n + 1 || 2 * upper.len() != self.col.len() + n {
+            return None;
+        }
+        self.next.clear();
+        self.next.extend_from_slice(&self.row_ptr[..n]);
+        let mut non_finite = None;
+        let mut negative = None;
+        for &(i, j, v) in upper {
+            if i >= n || j >= n || j < i {
+                return None;
+            }
+            let k = self.next[i];
+            if k >= self.row_ptr[i + 1] || self.col[k] != j {
+                return None;
+            }
+            self.val[k] = v;
+            self.next[i] += 1;
+            if j != i {
+                let k = self.next[j];
+                if k >= self.row_ptr[j + 1] || self.col[k] != i {
+                    return None;
+                }
+                self.val[k] = v;
+                self.next[j] += 1;
+            } else if v < 0.0 && negative.is_none() {
+                negative = Some(MlcpError::NegativeDiagonal { index: i, value: v });
+            }
+            if !v.is_finite() && non_finite.is_none() {
+                non_finite = Some(MlcpError::NonFiniteMatrix { row: i, col: j, value: v });
+            }
+        }
+        if (0..n).any(|i| self.next[i] != self.row_ptr[i + 1]) {
+            return None;
+        }
+        Some(match non_finite.or(negative) {
+            Some(e) => Err(e),
+            None => Ok(()),
+        })
     }
 
     fn assign_upper_inner(&mut self, n: usize, upper: &[(usize, usize, f64)]) -> Result<(), MlcpError> {
@@ -988,6 +1045,79 @@ mod tests {
                 "case {k}: {e}"
             );
             assert_eq!(a.n(), 0);
+        }
+    }
+
+    /// Reassigning over a held matrix (the values-only refill when the structure is the same)
+    /// gives what a fresh build gives, errors included, for the same structure with new values,
+    /// for another structure, and for every malformed list.
+    #[test]
+    fn reassignment_over_a_held_matrix_equals_a_fresh_build() {
+        use rand::{RngExt, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(11);
+        let fresh = |n: usize, upper: &[(usize, usize, f64)]| {
+            let mut a = SymCsr::default();
+            let r = a.assign_from_upper(n, upper);
+            (a, r)
+        };
+        for n in [1usize, 3, 30, 90] {
+            let mut upper = Vec::new();
+            for i in 0..n {
+                upper.push((i, i, 0.0));
+                for j in i + 1..n {
+                    if rng.random_range(0.0..1.0) < 0.3 {
+                        upper.push((i, j, 0.0));
+                    }
+                }
+            }
+            let mut held = SymCsr::default();
+            for round in 0..4 {
+                for e in &mut upper {
+                    e.2 = if e.0 == e.1 { rng.random_range(1.0..2.0) } else { rng.random_range(-0.1..0.1) };
+                }
+                held.assign_from_upper(n, &upper).unwrap();
+                assert_eq!(held, fresh(n, &upper).0, "n = {n}, round {round}");
+            }
+            // Non-finite and negative values over the held structure: the fresh build's error.
+            for (at, v) in [(upper.len() / 2, f64::NAN), (0, -1.0), (upper.len() - 1, f64::INFINITY)] {
+                let mut bad = upper.clone();
+                bad[at].2 = v;
+                let mut h = held.clone();
+                let got = h.assign_from_upper(n, &bad);
+                let want = fresh(n, &bad).1;
+                if v < 0.0 && bad[at].0 != bad[at].1 {
+                    assert!(got.is_ok() && want.is_ok());
+                } else {
+                    // Compared as text: a NaN in the error is not equal to itself.
+                    assert_eq!(format!("{got:?}"), format!("{want:?}"), "n = {n}: {v} at {at}");
+                    assert_eq!(h.n(), 0, "emptied on error");
+                }
+            }
+            // Another structure (one off-diagonal entry fewer), then back.
+            if let Some(drop) = upper.iter().position(|e| e.0 != e.1) {
+                let mut other = upper.clone();
+                other.remove(drop);
+                held.assign_from_upper(n, &other).unwrap();
+                assert_eq!(held, fresh(n, &other).0);
+                held.assign_from_upper(n, &upper).unwrap();
+                assert_eq!(held, fresh(n, &upper).0);
+            }
+        }
+        // Malformed lists with the held matrix's entry count: the fresh build's errors.
+        let ok: &[(usize, usize, f64)] = &[(0, 0, 1.0), (0, 1, 0.5), (1, 1, 1.0)];
+        let bad: [&[(usize, usize, f64)]; 4] = [
+            &[(0, 0, 1.0), (1, 0, 0.5), (1, 1, 1.0)],
+            &[(0, 1, 0.5), (0, 0, 1.0), (1, 1, 1.0)],
+            &[(0, 0, 1.0), (1, 1, 1.0), (0, 1, 0.5)],
+            &[(0, 0, 1.0), (0, 1, 0.5), (0, 1, 0.5)],
+        ];
+        for (k, t) in bad.iter().enumerate() {
+            let mut held = SymCsr::default();
+            held.assign_from_upper(2, ok).unwrap();
+            let got = held.assign_from_upper(2, t);
+            assert!(got.is_err(), "case {k}");
+            assert_eq!(got, fresh(2, t).1, "case {k}");
+            assert_eq!(held.n(), 0, "case {k}");
         }
     }
 
