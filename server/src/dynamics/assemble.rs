@@ -439,7 +439,7 @@ mod tests {
 
     /// Rows on the given body sets with random Jacobians, right-hand sides and compliances.
     fn random_rows(rng: &mut ChaCha8Rng, sets: &[&[Option<usize>]]) -> Vec<ConstraintRow> {
-        let mut r = |rng: &mut ChaCha8Rng| rng.random_range(-1.0..1.0);
+        let r = |rng: &mut ChaCha8Rng| rng.random_range(-1.0..1.0);
         sets.iter()
             .enumerate()
             .map(|(q, set)| {
