@@ -74,11 +74,8 @@ impl BodyMotion {
 /// Reusable buffers of the island assembly.
 #[derive(Debug, Default)]
 pub(crate) struct Assembler {
-    /// `M⁻¹ J_kᵀ` per island row and block (zero on a non-dynamic body).
-    w: Vec<[Jac6; MAX_ROW_BODIES]>,
-    /// Per island body: the (row, block) pairs touching it, CSR.
-    body_rows_start: Vec<usize>,
-    body_rows: Vec<(usize, usize)>,
+    /// `M⁻¹ Jᵀ` per row and block, and the rows at each body.
+    terms: RowTerms,
     fill: Vec<usize>,
     acc: Vec<f64>,
     stamp: Vec<usize>,
@@ -103,6 +100,38 @@ pub(crate) struct Assembler {
     pub index0: Vec<IndexState>,
     /// Solution of the island (island row order).
     pub lambda: Vec<f64>,
+}
+
+/// `W = M⁻¹ Jᵀ` of the island's rows and the rows at each of its bodies: what the terms of `A`
+/// are made of.
+#[derive(Debug, Default)]
+struct RowTerms {
+    /// `M⁻¹ J_kᵀ` per island row and block (zero on a non-dynamic body).
+    w: Vec<[Jac6; MAX_ROW_BODIES]>,
+    /// Per island body: the (row, block) pairs touching it, CSR.
+    body_rows_start: Vec<usize>,
+    body_rows: Vec<(usize, usize)>,
+}
+
+impl RowTerms {
+    /// Calls `f(j, J_{i,k} W_{j,k})` for every row `j ≥ i` sharing a dynamic body `k` with row
+    /// `i` (`r`), body by body in the row's block order and row by row in island order: the terms
+    /// of row `i` of the upper triangle, a pair of rows once per body they share. Both assembly
+    /// paths add them in this order, so their sums are the same to the bit.
+    #[inline]
+    fn for_each(&self, isl: &IslandInput<'_>, i: usize, r: &ConstraintRow, mut f: impl FnMut(usize, f64)) {
+        for s in 0..MAX_ROW_BODIES {
+            let Some(b) = isl.dyn_local(r, s) else { continue };
+            let j_i = &r.jac[s];
+            for &(j, sj) in &self.body_rows[self.body_rows_start[b]..self.body_rows_start[b + 1]] {
+                if j < i {
+                    continue;
+                }
+                let w = &self.w[j][sj];
+                f(j, j_i.lin.dot(&w.lin) + j_i.ang.dot(&w.ang));
+            }
+        }
+    }
 }
 
 /// What the assembly stages read of the island being assembled and of the world.
@@ -162,13 +191,13 @@ impl Assembler {
     /// Per island row: the `M⁻¹ Jᵀ` blocks, `b`, bounds and findex; counts the rows at each island
     /// body into `body_rows_start` (shifted by one, not yet summed).
     fn row_terms(&mut self, isl: &IslandInput<'_>) {
-        self.w.clear();
+        self.terms.w.clear();
         self.b.clear();
         self.lo.clear();
         self.hi.clear();
         self.findex.clear();
-        self.body_rows_start.clear();
-        self.body_rows_start.resize(isl.nb + 1, 0);
+        self.terms.body_rows_start.clear();
+        self.terms.body_rows_start.resize(isl.nb + 1, 0);
         self.structure.clear();
         for &ri in isl.island_rows {
             let r = &isl.rows[ri];
@@ -180,10 +209,10 @@ impl Assembler {
                 jv += r.jac[s].dot(&isl.motion[b].v, &isl.motion[b].w);
                 if isl.motion[b].dynamic {
                     *ws = isl.motion[b].apply_inv_mass(&r.jac[s]);
-                    self.body_rows_start[isl.dyn_local(r, s).unwrap() + 1] += 1;
+                    self.terms.body_rows_start[isl.dyn_local(r, s).unwrap() + 1] += 1;
                 }
             }
-            self.w.push(w);
+            self.terms.w.push(w);
             self.b.push(r.rhs - jv);
             self.lo.push(r.lo);
             self.hi.push(r.hi);
@@ -194,16 +223,16 @@ impl Assembler {
     /// The per-body (row, block) lists in CSR form, from the counts of [`Assembler::row_terms`].
     fn index_rows_by_body(&mut self, isl: &IslandInput<'_>) {
         for j in 0..isl.nb {
-            self.body_rows_start[j + 1] += self.body_rows_start[j];
+            self.terms.body_rows_start[j + 1] += self.terms.body_rows_start[j];
         }
         self.fill.clear();
-        self.fill.extend_from_slice(&self.body_rows_start[..isl.nb]);
-        self.body_rows.clear();
-        self.body_rows.resize(self.body_rows_start[isl.nb], (0, 0));
+        self.fill.extend_from_slice(&self.terms.body_rows_start[..isl.nb]);
+        self.terms.body_rows.clear();
+        self.terms.body_rows.resize(self.terms.body_rows_start[isl.nb], (0, 0));
         for (i, &ri) in isl.island_rows.iter().enumerate() {
             for s in 0..MAX_ROW_BODIES {
                 if let Some(b) = isl.dyn_local(&isl.rows[ri], s) {
-                    self.body_rows[self.fill[b]] = (i, s);
+                    self.terms.body_rows[self.fill[b]] = (i, s);
                     self.fill[b] += 1;
                 }
             }
@@ -224,23 +253,15 @@ impl Assembler {
             let r = &isl.rows[ri];
             self.row_start.push(self.triplets.len());
             self.touched.clear();
-            for s in 0..MAX_ROW_BODIES {
-                let Some(b) = isl.dyn_local(r, s) else { continue };
-                let j_i = &r.jac[s];
-                for &(j, sj) in &self.body_rows[self.body_rows_start[b]..self.body_rows_start[b + 1]] {
-                    if j < i {
-                        continue;
-                    }
-                    let w = &self.w[j][sj];
-                    let v = j_i.lin.dot(&w.lin) + j_i.ang.dot(&w.ang);
-                    if self.stamp[j] != i {
-                        self.stamp[j] = i;
-                        self.acc[j] = 0.0;
-                        self.touched.push(j);
-                    }
-                    self.acc[j] += v;
+            let (stamp, acc, touched) = (&mut self.stamp, &mut self.acc, &mut self.touched);
+            self.terms.for_each(isl, i, r, |j, v| {
+                if stamp[j] != i {
+                    stamp[j] = i;
+                    acc[j] = 0.0;
+                    touched.push(j);
                 }
-            }
+                acc[j] += v;
+            });
             // Row i of the upper triangle, columns sorted: what `Mlcp::assign_upper` takes.
             self.touched.sort_unstable();
             for &j in &self.touched {
@@ -266,17 +287,8 @@ impl Assembler {
             for &(_, j, _) in &self.triplets[entries.clone()] {
                 self.acc[j] = 0.0;
             }
-            for s in 0..MAX_ROW_BODIES {
-                let Some(b) = isl.dyn_local(r, s) else { continue };
-                let j_i = &r.jac[s];
-                for &(j, sj) in &self.body_rows[self.body_rows_start[b]..self.body_rows_start[b + 1]] {
-                    if j < i {
-                        continue;
-                    }
-                    let w = &self.w[j][sj];
-                    self.acc[j] += j_i.lin.dot(&w.lin) + j_i.ang.dot(&w.ang);
-                }
-            }
+            let acc = &mut self.acc;
+            self.terms.for_each(isl, i, r, |j, v| acc[j] += v);
             for e in &mut self.triplets[entries] {
                 let j = e.1;
                 e.2 = if j == i { self.acc[i] + r.compliance * inv_h2 } else { self.acc[j] };
@@ -307,7 +319,7 @@ impl Assembler {
     ) {
         for (i, &ri) in islands.rows(k).iter().enumerate() {
             let (r, l) = (&rows[ri], self.lambda[i]);
-            for (s, wj) in self.w[i].iter().enumerate() {
+            for (s, wj) in self.terms.w[i].iter().enumerate() {
                 // Non-dynamic blocks carry a zero `M⁻¹ Jᵀ`; skip them anyway (no write to a
                 // kinematic body's velocity).
                 if let Some(b) = r.bodies[s].filter(|_| *wj != Jac6::default()) {
