@@ -37,7 +37,7 @@ use crate::dynamics::joint::JOINT_SLOTS;
 use crate::dynamics::motor::JointMotor;
 use crate::dynamics::rows::{ConstraintRow, RowKey, WarmRow};
 use crate::dynamics::step::IslandSlot;
-use crate::solver::{Solver, SolverOptions, Variant};
+use crate::solver::{Solver, Variant};
 
 /// A body's pose and velocities: position, orientation `(i, j, k, w)`, linear and angular
 /// velocity (world frame).
@@ -215,16 +215,9 @@ impl World {
         ws.rows.clone_from(&state.joint_rows);
         ws.input_work = state.input_work;
         ws.gs_resolves = state.gs_resolves;
-        while ws.slots.len() < state.solver_memory.len() {
-            ws.slots.push(IslandSlot::new(settings.solver));
-        }
-        for (i, slot) in ws.slots.iter_mut().enumerate() {
-            match state.solver_memory.get(i) {
-                Some(&m) => slot.solver.set_cost_memory(m),
-                None => slot.solver.forget_history(),
-            }
-        }
-        restore_memory(&mut ws.proj_solvers, &state.projection_memory, settings.solver);
+        let options = settings.solver;
+        restore_memory(&mut ws.slots, &state.solver_memory, || IslandSlot::new(options), |s| &mut s.solver);
+        restore_memory(&mut ws.proj_solvers, &state.projection_memory, || Solver::new(options), |s| s);
         self.contacts.phase.restore(&state.narrow);
         Ok(())
     }
@@ -315,11 +308,17 @@ fn row_key_order(k: &RowKey) -> (u8, [u32; 5]) {
 
 /// Sets each island slot's solver memory; slots the state has not seen forget theirs (a new
 /// solver would have none), and missing slots get a new solver so that the memory has a home.
-fn restore_memory(solvers: &mut Vec<Solver>, memory: &[(f64, f64)], options: SolverOptions) {
-    while solvers.len() < memory.len() {
-        solvers.push(Solver::new(options));
+fn restore_memory<T>(
+    items: &mut Vec<T>,
+    memory: &[(f64, f64)],
+    new: impl Fn() -> T,
+    solver: impl Fn(&mut T) -> &mut Solver,
+) {
+    while items.len() < memory.len() {
+        items.push(new());
     }
-    for (i, s) in solvers.iter_mut().enumerate() {
+    for (i, item) in items.iter_mut().enumerate() {
+        let s = solver(item);
         match memory.get(i) {
             Some(&m) => s.set_cost_memory(m),
             None => s.forget_history(),
